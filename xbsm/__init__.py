@@ -1,0 +1,1 @@
+"""xbsm: an xarray-based electro-optical imaging system performance model."""

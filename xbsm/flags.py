@@ -1,0 +1,84 @@
+"""Validity flags: one bit per known way a result can be untrustworthy.
+
+Results carry an integer variable ``flags`` with CF ``flag_masks`` and
+``flag_meanings`` attributes. A set bit never replaces a value by a silent
+NaN: where a value is NaN, a bit says why; where a value is finite but
+outside a method's range of validity, a bit says which range.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+# bit -> (meaning, description). The meanings are CF flag_meanings words.
+FLAGS: dict[str, tuple[int, str]] = {
+    "beyond_database": (
+        1,
+        "no atmosphere data for this geometry (beyond the horizon or outside the "
+        "MODTRAN table); radiometric results are NaN",
+    ),
+    "atmosphere_sparse": (
+        2,
+        "atmosphere interpolated across a wide database gap (altitude between "
+        "24.5 km and 550 km)",
+    ),
+    "well_fill_limited": (
+        4,
+        "integration time was shortened to keep the well below its fill limit",
+    ),
+    "snr_out_of_range": (
+        8,
+        "contrast SNR outside the GIQE calibration range",
+    ),
+    "rer_out_of_range": (16, "RER outside the GIQE calibration range"),
+    "gsd_out_of_range": (32, "GSD outside the GIQE calibration range"),
+    "elevation_out_of_range": (64, "elevation angle outside the GIQE calibration range"),
+    "undersampled_grid": (
+        128,
+        "frequency sampling of the chosen method does not resolve the edge-response "
+        "integrand (result may be inaccurate)",
+    ),
+    "niirs_out_of_scale": (256, "NIIRS outside the 0-10 rating scale"),
+    "snr_nonpositive": (
+        512,
+        "contrast SNR at or below zero: GIQE noise terms are undefined; NIIRS is NaN",
+    ),
+}
+
+
+def flag(name: str) -> int:
+    """Return the bit of the flag called ``name``."""
+    return FLAGS[name][0]
+
+
+def flag_attrs(long_name: str = "validity flags") -> dict:
+    """CF attributes for an integer flag variable using every known bit."""
+    names = list(FLAGS)
+    return {
+        "long_name": long_name,
+        "units": "1",
+        "flag_masks": np.array([FLAGS[n][0] for n in names], dtype=np.int32),
+        "flag_meanings": " ".join(names),
+    }
+
+
+def set_flag(flags: xr.DataArray, name: str, condition: xr.DataArray) -> xr.DataArray:
+    """Return ``flags`` with bit ``name`` set wherever ``condition`` holds."""
+    bit = np.int32(flag(name))
+    out = xr.where(condition, flags | bit, flags).astype(np.int32)
+    return out.assign_attrs(flag_attrs())
+
+
+def empty_flags(like: xr.DataArray | None = None) -> xr.DataArray:
+    """A flag variable with no bit set, broadcast like ``like`` (or a scalar)."""
+    if like is None:
+        out = xr.DataArray(np.int32(0))
+    else:
+        out = xr.zeros_like(like, dtype=np.int32)
+    return out.assign_attrs(flag_attrs())
+
+
+def has_flag(flags: xr.DataArray, name: str) -> xr.DataArray:
+    """Boolean DataArray: where the bit ``name`` is set."""
+    return (flags & np.int32(flag(name))) != 0

@@ -1,0 +1,1 @@
+"""Optical transfer functions, one module per mechanism."""
