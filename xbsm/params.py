@@ -1,0 +1,425 @@
+"""Sensor and scenario parameters as validated ``xr.Dataset`` objects.
+
+``sensor(...)`` and ``scenario(...)`` are the public entry points. Every
+parameter is SI (a plain float means SI) and may be a scalar or an
+``xr.DataArray`` with dimensions of its own: such a dimension is a sweep and
+every result carries it. Spectral parameters (quantum efficiency, optics
+transmission, stray irradiance) are DataArrays over ``wavelength``; inside the
+dataset each keeps its own wavelength coordinate under a private dimension
+name (``<parameter>_wavelength``) so that differently sampled curves can live
+side by side.
+
+Defaults are pyBSM 0.16.1's, except the detector height default (see
+:func:`sensor`). Bad input raises ``ValueError`` naming the parameter and its
+allowed range; dask-backed inputs are checked lazily, when computed. Inputs
+are never modified.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+WAVELENGTH_MIN = 0.3e-6
+"""Shortest wavelength of the atmosphere database. [m]"""
+WAVELENGTH_MAX = 14.0e-6
+"""Longest wavelength of the atmosphere database. [m]"""
+VISIBILITIES = (23.0, 5.0)
+"""Visibilities in the atmosphere database (MODTRAN IHAZE 1 and 2). [km]"""
+ALTITUDE_RANGE = (2.0, 550e3)
+"""Sensor altitudes covered by the atmosphere database. [m]"""
+GROUND_RANGE_RANGE = (0.0, 300e3)
+"""Ground ranges covered by the atmosphere database. [m]"""
+
+
+@dataclass(frozen=True)
+class Spec:
+    """Definition of one parameter: units, meaning and allowed interval."""
+
+    units: str
+    long_name: str
+    low: float = -math.inf
+    high: float = math.inf
+    low_open: bool = False
+    high_open: bool = False
+
+    def describe(self) -> str:
+        """Human-readable allowed interval, e.g. ``(0, inf) m``."""
+        left = "(" if self.low_open else "["
+        right = ")" if self.high_open else "]"
+        return f"{left}{self.low:g}, {self.high:g}{right} {self.units}"
+
+    def violated(self, values: np.ndarray) -> np.ndarray:
+        """Boolean mask of values outside the interval (NaN counts as outside)."""
+        values = np.asarray(values, dtype=float)
+        below = values <= self.low if self.low_open else values < self.low
+        above = values >= self.high if self.high_open else values > self.high
+        return below | above | np.isnan(values)
+
+
+POSITIVE = {"low": 0.0, "low_open": True}
+NONNEGATIVE = {"low": 0.0}
+FRACTION = {"low": 0.0, "high": 1.0}
+
+SENSOR_SPECS: dict[str, Spec] = {
+    "aperture_diameter": Spec("m", "effective aperture diameter", **POSITIVE),
+    "focal_length": Spec("m", "effective focal length", **POSITIVE),
+    "pixel_pitch_x": Spec("m", "detector pitch along x", **POSITIVE),
+    "pixel_pitch_y": Spec("m", "detector pitch along y", **POSITIVE),
+    "detector_width_x": Spec("m", "detector active width along x", **POSITIVE),
+    "detector_width_y": Spec("m", "detector active width along y", **POSITIVE),
+    "wavelength_min": Spec(
+        "m", "short edge of the spectral band", WAVELENGTH_MIN, WAVELENGTH_MAX, high_open=True
+    ),
+    "wavelength_max": Spec(
+        "m", "long edge of the spectral band", WAVELENGTH_MIN, WAVELENGTH_MAX, low_open=True
+    ),
+    "obscuration_ratio": Spec(
+        "1", "relative linear obscuration of the aperture", 0.0, 1.0, high_open=True
+    ),
+    "integration_time": Spec("s", "maximum integration time", **POSITIVE),
+    "dark_current": Spec("s-1", "detector dark current in electrons per second", **NONNEGATIVE),
+    "read_noise": Spec("1", "read noise in rms electrons", **NONNEGATIVE),
+    "other_noise": Spec(
+        "1", "root-sum-square of other noise sources in rms electrons", **NONNEGATIVE
+    ),
+    "max_well": Spec("1", "detector well capacity in electrons", **POSITIVE),
+    "max_well_fill": Spec(
+        "1", "largest allowed fraction of the well", 0.0, 1.0, low_open=True
+    ),
+    "bit_depth": Spec("1", "analog-to-digital converter resolution in bits", **POSITIVE),
+    "tdi_stages": Spec("1", "number of time-delay-integration stages", low=1.0),
+    "frame_stacks": Spec("1", "number of frames added together", low=1.0),
+    "cold_shield_temperature": Spec("K", "cold shield temperature", **POSITIVE),
+    "optics_temperature": Spec("K", "optics temperature", **POSITIVE),
+    "optics_emissivity": Spec("1", "emissivity of the optics (cold filter excluded)", **FRACTION),
+    "cold_filter_transmission": Spec("1", "cold filter transmission", **FRACTION),
+    "cold_filter_temperature": Spec("K", "cold filter temperature", **POSITIVE),
+    "cold_filter_emissivity": Spec("1", "cold filter emissivity", **FRACTION),
+    "jitter_x": Spec("rad", "rms line-of-sight jitter along x", **NONNEGATIVE),
+    "jitter_y": Spec("rad", "rms line-of-sight jitter along y", **NONNEGATIVE),
+    "drift_rate_x": Spec("rad s-1", "line-of-sight drift rate along x"),
+    "drift_rate_y": Spec("rad s-1", "line-of-sight drift rate along y"),
+    "wavefront_variance": Spec(
+        "rad2", "wavefront phase variance at the reference wavelength", **NONNEGATIVE
+    ),
+    "wavefront_wavelength": Spec(
+        "m", "wavelength at which the wavefront variance is given", **POSITIVE
+    ),
+    "wavefront_correlation_length_x": Spec(
+        "m", "correlation length of the pupil phase along x", **POSITIVE
+    ),
+    "wavefront_correlation_length_y": Spec(
+        "m", "correlation length of the pupil phase along y", **POSITIVE
+    ),
+    "optics_transmission": Spec("1", "optics transmission (obscuration excluded)", **FRACTION),
+    "quantum_efficiency": Spec("1", "detector quantum efficiency", **FRACTION),
+    "stray_irradiance": Spec(
+        "W m-2 m-1", "stray-light spectral irradiance at the focal plane", **NONNEGATIVE
+    ),
+}
+
+SPECTRAL = ("optics_transmission", "quantum_efficiency", "stray_irradiance")
+
+SCENARIO_SPECS: dict[str, Spec] = {
+    "altitude": Spec("m", "sensor altitude above ground", *ALTITUDE_RANGE),
+    "ground_range": Spec("m", "ground range from sensor nadir to target", *GROUND_RANGE_RANGE),
+    "visibility": Spec("km", "meteorological visibility (MODTRAN rural aerosol)", 5.0, 23.0),
+    "platform_speed": Spec("m s-1", "platform ground speed", **NONNEGATIVE),
+    "target_reflectance": Spec("1", "target reflectance", **FRACTION),
+    "target_temperature": Spec("K", "target temperature", **POSITIVE),
+    "background_reflectance": Spec("1", "background reflectance", **FRACTION),
+    "background_temperature": Spec("K", "background temperature", **POSITIVE),
+    "high_altitude_wind_speed": Spec(
+        "m s-1", "high-altitude wind speed of the Hufnagel-Valley profile", **NONNEGATIVE
+    ),
+    "cn2_at_1m": Spec(
+        "m-2/3", "refractive-index structure parameter 1 m above ground", **NONNEGATIVE
+    ),
+}
+
+
+def _raise(name: str, spec: Spec, bad) -> None:
+    raise ValueError(
+        f"{name} must lie in {spec.describe()}; got {bad!r}"
+    )
+
+
+def _lazy_check(block, name, spec):
+    mask = spec.violated(block)
+    if np.any(mask):
+        _raise(name, spec, np.asarray(block)[mask].ravel()[0])
+    return block
+
+
+def _validated(name: str, value, spec: Spec) -> xr.DataArray:
+    """Return ``value`` as a DataArray with attrs, raising if it is out of range."""
+    if isinstance(value, xr.Variable):
+        value = xr.DataArray(value)
+    if isinstance(value, xr.DataArray):
+        out = value.copy(deep=False)
+    else:
+        array = np.asarray(value, dtype=float)
+        if array.ndim:
+            raise ValueError(
+                f"{name} must be a scalar or an xr.DataArray with named dimensions; "
+                f"got an unlabelled array of shape {array.shape}"
+            )
+        out = xr.DataArray(array)
+    if out.chunks is not None:
+        import dask.array as dsa
+
+        data = dsa.map_blocks(_lazy_check, out.data, name, spec, dtype=out.dtype)
+        out = out.copy(data=data)
+    else:
+        mask = spec.violated(out.values)
+        if np.any(mask):
+            _raise(name, spec, out.values[mask].ravel()[0])
+    return out.assign_attrs(units=spec.units, long_name=spec.long_name)
+
+
+def _spectral(name: str, value, spec: Spec) -> xr.DataArray:
+    """Validate a spectral parameter and move it onto its own wavelength dim."""
+    if not isinstance(value, xr.DataArray):
+        return _validated(name, value, spec)
+    if "wavelength" not in value.dims:
+        return _validated(name, value, spec)
+    if "wavelength" not in value.coords:
+        raise ValueError(f"{name} needs a 'wavelength' coordinate [m]")
+    wl = np.asarray(value["wavelength"].values, dtype=float)
+    if wl.size < 1 or np.any(np.diff(wl) <= 0):
+        raise ValueError(f"{name}: its wavelength coordinate must increase strictly")
+    out = _validated(name, value, spec)
+    return out.rename(wavelength=f"{name}_wavelength")
+
+
+def _finish(values: dict[str, xr.DataArray], kind: str) -> xr.Dataset:
+    ds = xr.Dataset(values)
+    ds.attrs["xbsm_kind"] = kind
+    return ds
+
+
+def sensor(
+    *,
+    aperture_diameter,
+    focal_length,
+    pixel_pitch_x,
+    wavelength_min,
+    wavelength_max,
+    pixel_pitch_y=None,
+    detector_width_x=None,
+    detector_width_y=None,
+    obscuration_ratio=0.0,
+    optics_transmission=1.0,
+    quantum_efficiency=1.0,
+    stray_irradiance=0.0,
+    integration_time=1.0,
+    dark_current=0.0,
+    read_noise=0.0,
+    other_noise=0.0,
+    max_well=1.0e8,
+    max_well_fill=1.0,
+    bit_depth=100.0,
+    tdi_stages=1.0,
+    frame_stacks=1.0,
+    cold_shield_temperature=70.0,
+    optics_temperature=270.0,
+    optics_emissivity=0.0,
+    cold_filter_transmission=1.0,
+    cold_filter_temperature=70.0,
+    cold_filter_emissivity=0.0,
+    jitter_x=0.0,
+    jitter_y=0.0,
+    drift_rate_x=0.0,
+    drift_rate_y=0.0,
+    wavefront_variance=0.0,
+    wavefront_wavelength=0.633e-6,
+    wavefront_correlation_length_x=None,
+    wavefront_correlation_length_y=None,
+    filter_kernel=None,
+) -> xr.Dataset:
+    """Camera parameters as a validated dataset.
+
+    Parameters
+    ----------
+    aperture_diameter : float or xr.DataArray
+        Effective entrance-pupil diameter. [m]
+    focal_length : float or xr.DataArray
+        Effective focal length. [m]
+    pixel_pitch_x : float or xr.DataArray
+        Detector centre-to-centre spacing along x. [m]
+    wavelength_min, wavelength_max : float
+        Spectral band edges, inside the database's 0.3-14 um. [m]
+    pixel_pitch_y : float or xr.DataArray, optional
+        Pitch along y; defaults to ``pixel_pitch_x``. [m]
+    detector_width_x : float or xr.DataArray, optional
+        Active detector width along x; defaults to the pitch (100% fill). [m]
+    detector_width_y : float or xr.DataArray, optional
+        Active width along y; defaults to the same fill factor as along x,
+        ``detector_width_x / pixel_pitch_x * pixel_pitch_y``. (pyBSM 0.16.1
+        uses the inverse fill factor, ``p_x / w_x * p_y``;
+        :mod:`xbsm.pybsm_compat` reproduces that.) [m]
+    obscuration_ratio : float or xr.DataArray
+        Relative linear obscuration of the aperture. [1]
+    optics_transmission, quantum_efficiency : float or xr.DataArray
+        Scalars or curves over ``wavelength`` [m], resampled linearly onto the
+        database wavelengths and zero outside the curve's own range. [1]
+    stray_irradiance : float or xr.DataArray
+        Stray-light spectral irradiance added at the focal plane (paper Eq. 2). [W m-2 m-1]
+    integration_time : float or xr.DataArray
+        Maximum integration time; shortened when the well would overfill. [s]
+    dark_current : float or xr.DataArray
+        Dark current. [electrons/s]
+    read_noise, other_noise : float or xr.DataArray
+        Read noise and the root-sum-square of any other noise. [rms electrons]
+    max_well : float or xr.DataArray
+        Well capacity. [electrons]
+    max_well_fill : float or xr.DataArray
+        Largest allowed well fill fraction, (0, 1]. [1]
+    bit_depth : float or xr.DataArray
+        ADC resolution. [bits]
+    tdi_stages, frame_stacks : float or xr.DataArray
+        Time-delay-integration stages and number of frames added. [1]
+    cold_shield_temperature, optics_temperature, cold_filter_temperature : float
+        Temperatures for self-emission. [K]
+    optics_emissivity, cold_filter_transmission, cold_filter_emissivity : float
+        [1]
+    jitter_x, jitter_y : float or xr.DataArray
+        rms line-of-sight jitter. [rad]
+    drift_rate_x, drift_rate_y : float or xr.DataArray
+        Line-of-sight drift rate. [rad/s]
+    wavefront_variance : float or xr.DataArray
+        Pupil phase variance at ``wavefront_wavelength``: (2 pi waves rms)^2. [rad^2]
+    wavefront_wavelength : float or xr.DataArray
+        [m]
+    wavefront_correlation_length_x, wavefront_correlation_length_y : float, optional
+        Correlation lengths of the pupil phase; default the aperture diameter. [m]
+    filter_kernel : array_like or xr.DataArray, optional
+        2-D post-processing (sharpening) kernel, rows along y, columns along x;
+        dims ``kernel_y``, ``kernel_x``. Default: no filter ([[1]]).
+
+    Returns
+    -------
+    xr.Dataset
+        One variable per parameter, each with ``units`` and ``long_name``.
+    """
+    given = dict(locals())
+    if pixel_pitch_y is None:
+        given["pixel_pitch_y"] = pixel_pitch_x
+    if detector_width_x is None:
+        given["detector_width_x"] = given["pixel_pitch_x"]
+    if detector_width_y is None:
+        given["detector_width_y"] = (
+            given["detector_width_x"] / given["pixel_pitch_x"] * given["pixel_pitch_y"]
+        )
+    for axis in ("x", "y"):
+        key = f"wavefront_correlation_length_{axis}"
+        if given[key] is None:
+            given[key] = aperture_diameter
+    kernel = given.pop("filter_kernel")
+    values = {}
+    for name, spec in SENSOR_SPECS.items():
+        if name in SPECTRAL:
+            values[name] = _spectral(name, given[name], spec)
+        else:
+            values[name] = _validated(name, given[name], spec)
+    for name in ("wavelength_min", "wavelength_max"):
+        if values[name].ndim:
+            raise ValueError(f"{name} must be a scalar (band edges cannot be swept)")
+    if not float(values["wavelength_min"]) < float(values["wavelength_max"]):
+        raise ValueError(
+            "wavelength_min must be smaller than wavelength_max; got "
+            f"{float(values['wavelength_min'])!r} >= {float(values['wavelength_max'])!r}"
+        )
+    values["filter_kernel"] = _kernel(kernel)
+    return _finish(values, "sensor")
+
+
+def _kernel(kernel) -> xr.DataArray:
+    if kernel is None:
+        kernel = [[1.0]]
+    if isinstance(kernel, xr.DataArray):
+        if set(kernel.dims) != {"kernel_y", "kernel_x"}:
+            raise ValueError("filter_kernel must have dims ('kernel_y', 'kernel_x')")
+        out = kernel.transpose("kernel_y", "kernel_x").astype(float)
+    else:
+        array = np.asarray(kernel, dtype=float)
+        if array.ndim == 1:
+            array = array[np.newaxis, :]
+        if array.ndim != 2 or array.size == 0:
+            raise ValueError(
+                f"filter_kernel must be a non-empty 2-D array; got shape {array.shape}"
+            )
+        out = xr.DataArray(array, dims=("kernel_y", "kernel_x"))
+    if not np.all(np.isfinite(out.values)):
+        raise ValueError("filter_kernel must be finite")
+    total = float(out.sum())
+    if not math.isclose(total, 1.0, rel_tol=0, abs_tol=1e-9):
+        raise ValueError(f"filter_kernel must sum to 1 (within 1e-9); got {total!r}")
+    return out.assign_attrs(units="1", long_name="post-processing filter kernel")
+
+
+def scenario(
+    *,
+    altitude,
+    ground_range,
+    visibility,
+    platform_speed=0.0,
+    target_reflectance=0.15,
+    target_temperature=295.0,
+    background_reflectance=0.07,
+    background_temperature=293.0,
+    high_altitude_wind_speed=21.0,
+    cn2_at_1m=1.7e-14,
+) -> xr.Dataset:
+    """Imaging geometry, atmosphere and target as a validated dataset.
+
+    Parameters
+    ----------
+    altitude : float or xr.DataArray
+        Sensor altitude above the (spherical) ground, 2 m to 550 km. [m]
+    ground_range : float or xr.DataArray
+        Ground distance from the sensor's nadir point to the target, 0-300 km. [m]
+    visibility : float or xr.DataArray
+        Meteorological visibility: 23 (MODTRAN rural IHAZE 1) or 5 (IHAZE 2). [km]
+    platform_speed : float or xr.DataArray
+        Platform ground speed (blends short and long exposure turbulence). [m/s]
+    target_reflectance, background_reflectance : float or xr.DataArray
+        Lambertian reflectances used by :func:`xbsm.snr` with
+        ``targets="scenario"``; the GIQE uses its own standard target. [1]
+    target_temperature, background_temperature : float or xr.DataArray
+        [K]
+    high_altitude_wind_speed : float or xr.DataArray
+        Hufnagel-Valley wind parameter; 21 m/s is HV 5/7. [m/s]
+    cn2_at_1m : float or xr.DataArray
+        Refractive-index structure parameter near the ground; 1.7e-14 is HV 5/7;
+        0 switches turbulence off. [m^-2/3]
+
+    Returns
+    -------
+    xr.Dataset
+        One variable per parameter, each with ``units`` and ``long_name``.
+    """
+    given = dict(locals())
+    values = {name: _validated(name, given[name], spec) for name, spec in SCENARIO_SPECS.items()}
+    vis = values["visibility"]
+    if vis.chunks is None:
+        unknown = ~np.isin(vis.values, VISIBILITIES)
+        if np.any(unknown):
+            raise ValueError(
+                f"visibility must be one of {VISIBILITIES} km (MODTRAN IHAZE 1, 2); "
+                f"got {vis.values[unknown].ravel()[0]!r}"
+            )
+    return _finish(values, "scenario")
+
+
+def check_kind(ds: xr.Dataset, kind: str, argument: str) -> None:
+    """Raise a clear error when a dataset of the wrong kind is passed."""
+    if not isinstance(ds, xr.Dataset) or ds.attrs.get("xbsm_kind") != kind:
+        raise ValueError(
+            f"{argument} must be the dataset returned by xbsm.{kind}(...) "
+            f"or xbsm.pybsm_compat.{kind}(...)"
+        )
