@@ -1,0 +1,223 @@
+"""Diffraction OTFs of a circular aperture: obscured (IBSM 3-20) and defocused (Hopkins 1955)."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from scipy.special import jv
+
+from .spectral import _finish, _finite, _positive, _require
+
+__all__ = ["circular_aperture", "defocused_aperture", "defocus_wavefront_coefficient"]
+
+
+def _diffraction_term(r):
+    """(2/pi)(acos r - r sqrt(1 - r^2)) for 0 <= r <= 1, else 0."""
+    rc = np.clip(r, 0.0, 1.0)
+    return (2.0 / np.pi) * (np.arccos(rc) - rc * np.sqrt(1.0 - rc**2))
+
+
+def circular_aperture(fx, fy, wavelength, aperture_diameter, obscuration_ratio=0.0):
+    r"""Diffraction OTF of a circular aperture with a centred circular obscuration.
+
+    Parameters
+    ----------
+    fx, fy : xr.DataArray
+        Angular spatial frequencies, broadcast against each other. [cycles/rad]
+    wavelength : float or xr.DataArray
+        Wavelength. [m]
+    aperture_diameter : float or xr.DataArray
+        Effective entrance-pupil diameter, > 0. [m]
+    obscuration_ratio : float or xr.DataArray
+        Relative linear obscuration (obscuration diameter / aperture
+        diameter), in [0, 1). [1]
+
+    Returns
+    -------
+    xr.DataArray
+        Real OTF, broadcast over every input dimension; 0 beyond the cutoff
+        :math:`D/\lambda`. [1]
+
+    Notes
+    -----
+    IBSM Eq. 3-20. With :math:`\nu = \rho\lambda/D`,
+    :math:`\rho = \sqrt{f_x^2 + f_y^2}` and obscuration ratio :math:`\eta`:
+
+    .. math::
+
+        H = \frac{A(\nu) + \eta^2 A(\nu/\eta) + C(\nu)}{1 - \eta^2},\quad
+        A(x) = \frac{2}{\pi}\left(\cos^{-1}x - x\sqrt{1 - x^2}\right)
+        \ (x \le 1,\ \text{else } 0)
+
+    with :math:`C = -2\eta^2` for :math:`\nu < (1-\eta)/2` and, for
+    :math:`(1-\eta)/2 \le \nu \le (1+\eta)/2` and
+    :math:`\cos\phi = (1 + \eta^2 - 4\nu^2)/(2\eta)`,
+
+    .. math::
+
+        C = \frac{2\eta\sin\phi}{\pi} + \frac{(1+\eta^2)\phi}{\pi} - 2\eta^2
+            - \frac{2(1-\eta^2)}{\pi}
+              \tan^{-1}\!\left(\frac{1+\eta}{1-\eta}\tan\frac{\phi}{2}\right)
+
+    and 0 beyond. For :math:`\eta = 0` it reduces to :math:`A(\nu)`.
+    """
+    _positive("wavelength", wavelength)
+    _positive("aperture_diameter", aperture_diameter)
+    _require("obscuration_ratio", obscuration_ratio, lambda a: (a >= 0) & (a < 1), "in [0, 1)")
+    cutoff = aperture_diameter / wavelength
+    nu = np.hypot(fx, fy) / cutoff
+    unobscured = _diffraction_term(nu)
+    eta = obscuration_ratio
+    if not isinstance(eta, xr.DataArray) and eta == 0:
+        return _finish(unobscured, circular_aperture)
+    # eta = 0 entries of a sweep: every obscured term vanishes; guard the divisions only.
+    eta_safe = xr.where(eta > 0, eta, 1.0) if isinstance(eta, xr.DataArray) else eta
+    eta2 = eta**2
+    inner = eta2 * _diffraction_term(nu / eta_safe)
+    cos_phi = (1.0 + eta2 - 4.0 * nu**2) / (2.0 * eta_safe)
+    phi = np.arccos(np.clip(cos_phi, -1.0, 1.0))
+    transition = (
+        2.0 * eta * np.sin(phi) / np.pi
+        + (1.0 + eta2) * phi / np.pi
+        - 2.0 * eta2
+        - (2.0 * (1.0 - eta2) / np.pi) * np.arctan((1.0 + eta) / (1.0 - eta) * np.tan(phi / 2.0))
+    )
+    lower, upper = (1.0 - eta) / 2.0, (1.0 + eta) / 2.0
+    overlap = xr.where(nu < lower, -2.0 * eta2, xr.where(nu <= upper, transition, 0.0))
+    if isinstance(eta, xr.DataArray):
+        overlap = xr.where(eta > 0, overlap, 0.0)
+        inner = xr.where(eta > 0, inner, 0.0)
+    out = (unobscured + inner + overlap) / (1.0 - eta2)
+    return _finish(out, circular_aperture)
+
+
+def defocus_wavefront_coefficient(focus_shift, aperture_diameter, focal_length):
+    r"""Defocus wavefront coefficient W20 produced by a longitudinal focus shift.
+
+    Parameters
+    ----------
+    focus_shift : float or xr.DataArray
+        Distance between the detector plane and the best-focus plane. [m]
+    aperture_diameter : float or xr.DataArray
+        Effective entrance-pupil diameter, > 0. [m]
+    focal_length : float or xr.DataArray
+        Effective focal length, > 0. [m]
+
+    Returns
+    -------
+    float or xr.DataArray
+        Peak optical path difference at the pupil edge, W20. [m]
+
+    Notes
+    -----
+    The convention of pyBSM's ``circular_aperture_OTF_with_defocus``, with the
+    marginal-ray angle :math:`\sin^2\theta = 1/(1 + 4F^2)`, :math:`F = f/D`:
+
+    .. math:: W_{20} = \frac{\delta z}{2\,(1 + 4F^2)} \approx \frac{\delta z}{8F^2}
+    """
+    _positive("aperture_diameter", aperture_diameter)
+    _positive("focal_length", focal_length)
+    f_number = focal_length / aperture_diameter
+    out = focus_shift / (2.0 * (1.0 + 4.0 * f_number**2))
+    return _finish(out, defocus_wavefront_coefficient, units="m")
+
+
+def _hopkins_terms(a_max: float) -> int:
+    r"""Count the terms of each Hopkins series for Bessel arguments up to ``a_max``.
+
+    The series are truncated after Bessel order ``n_max = a + 6 a^(1/3) + 30``;
+    beyond it :math:`|J_n(a)| < 10^{-17}` for every :math:`a` (checked for
+    :math:`10^{-2} \le a \le 10^3`), so truncation adds no error above
+    rounding. The sums have terms up to order :math:`2N + 2`.
+    """
+    n_max = a_max + 6.0 * a_max ** (1.0 / 3.0) + 30.0
+    return int(np.ceil(n_max / 2.0))
+
+
+def _hopkins_kernel(s, waves):
+    """Hopkins (1955) defocused OTF; s = 2 rho/rho_c in [0, 2], waves = W20/lambda."""
+    s, waves = np.broadcast_arrays(s, waves)
+    sc = np.clip(s, 0.0, 2.0)
+    a = 4.0 * np.pi * waves * sc
+    beta = np.arccos(sc / 2.0)
+    n_terms = _hopkins_terms(float(np.max(np.abs(a), initial=0.0)))
+    even = beta * jv(1, a)  # multiplies cos(a s / 2)
+    odd = np.zeros_like(a)  # multiplies sin(a s / 2)
+    j_even, j_odd_prev = jv(0, a), None  # J_{2n} and J_{2n-1}
+    for n in range(n_terms + 1):
+        j_odd, j_even_next = jv(2 * n + 1, a), jv(2 * n + 2, a)
+        odd += (-1.0) ** n * np.sin((2 * n + 1) * beta) / (2 * n + 1) * (j_even - j_even_next)
+        if n >= 1:
+            even += (-1.0) ** (n + 1) * np.sin(2 * n * beta) / (2 * n) * (j_odd_prev - j_odd)
+        j_even, j_odd_prev = j_even_next, j_odd
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = 4.0 / (np.pi * a) * (np.cos(a * sc / 2.0) * even - np.sin(a * sc / 2.0) * odd)
+    in_focus = (2.0 * beta - np.sin(2.0 * beta)) / np.pi
+    out = np.where(a == 0.0, in_focus, out)
+    out = np.where(sc == 0.0, 1.0, out)
+    return np.where(s >= 2.0, 0.0, out)
+
+
+def defocused_aperture(fx, fy, wavelength, aperture_diameter, defocus_waves=None, defocus_opd=None):
+    r"""Diffraction OTF of an unobscured circular aperture with defocus.
+
+    Give the defocus as exactly one of ``defocus_waves`` or ``defocus_opd``.
+    A longitudinal focus shift converts to ``defocus_opd`` with
+    :func:`defocus_wavefront_coefficient`.
+
+    Parameters
+    ----------
+    fx, fy : xr.DataArray
+        Angular spatial frequencies, broadcast against each other. [cycles/rad]
+    wavelength : float or xr.DataArray
+        Wavelength. [m]
+    aperture_diameter : float or xr.DataArray
+        Effective entrance-pupil diameter, > 0. [m]
+    defocus_waves : float or xr.DataArray, optional
+        Defocus wavefront coefficient W20 (peak optical path difference at the
+        pupil edge relative to the reference sphere) in waves at
+        ``wavelength``. [1]
+    defocus_opd : float or xr.DataArray, optional
+        The same coefficient W20 as a length; divided by ``wavelength``. [m]
+
+    Returns
+    -------
+    xr.DataArray
+        Real OTF (it changes sign beyond about 0.5 waves of defocus),
+        broadcast over every input dimension; 0 beyond :math:`D/\lambda`. [1]
+
+    Notes
+    -----
+    Hopkins (1955), Proc. R. Soc. A 231, 91, with :math:`s = 2\rho\lambda/D`,
+    :math:`\beta = \cos^{-1}(s/2)`, :math:`a = 4\pi W_{20} s/\lambda`:
+
+    .. math::
+
+        H = \frac{4}{\pi a}\cos\frac{as}{2}\Big[\beta J_1(a)
+            + \sum_{n\ge1} (-1)^{n+1}\frac{\sin 2n\beta}{2n}
+              \big(J_{2n-1}(a) - J_{2n+1}(a)\big)\Big]
+          - \frac{4}{\pi a}\sin\frac{as}{2}\sum_{n\ge0} (-1)^n
+              \frac{\sin(2n+1)\beta}{2n+1}\big(J_{2n}(a) - J_{2n+2}(a)\big)
+
+    Both sums run to Bessel order :math:`a_{max} + 6a_{max}^{1/3} + 30`
+    (:math:`a_{max}` the largest argument in each chunk), past which the
+    terms are below 1e-17: the series is converged to rounding (checked
+    against the pupil autocorrelation to 1e-13 up to 10 waves). At
+    :math:`a = 0` the in-focus limit :math:`(2\beta - \sin 2\beta)/\pi` is used.
+    pyBSM 0.16.1 writes :math:`\sin(2n\beta(J - J))` for
+    :math:`\sin(2n\beta)(J - J)`, uses :math:`2/(\pi a)` for
+    :math:`4/(\pi a)` and stops after four terms (-27 % at
+    :math:`\rho/\rho_c = 0.3` for 0.25 waves).
+    """
+    if (defocus_waves is None) == (defocus_opd is None):
+        raise ValueError("give exactly one of defocus_waves or defocus_opd")
+    _positive("wavelength", wavelength)
+    _positive("aperture_diameter", aperture_diameter)
+    _finite("defocus_waves", defocus_waves)
+    _finite("defocus_opd", defocus_opd)
+    waves = defocus_waves if defocus_opd is None else defocus_opd / wavelength
+    s = 2.0 * np.hypot(fx, fy) * wavelength / aperture_diameter
+    if not isinstance(waves, xr.DataArray):
+        waves = xr.DataArray(waves)
+    out = xr.apply_ufunc(_hopkins_kernel, s, waves, dask="parallelized", output_dtypes=[float])
+    return _finish(out, defocused_aperture)

@@ -1,0 +1,392 @@
+"""Atmospheric turbulence: Hufnagel-Valley Cn2, coherence diameter r0, OTFs (IBSM 3-3, 3-9)."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from ..geometry import altitude_along_path
+from .spectral import _finish, _nonnegative, _positive, _require, spectral_average
+
+__all__ = [
+    "hufnagel_valley",
+    "path_coherence_diameter",
+    "slant_path_coherence_diameter",
+    "scale_coherence_diameter",
+    "band_coherence_diameter",
+    "turbulence",
+    "wind_blended_turbulence",
+    "polychromatic_turbulence",
+]
+
+REFERENCE_WAVELENGTH = 1.0e-6
+"""Wavelength at which the slant-path r0 is integrated before scaling. [m]"""
+
+PATH_RULES = ("trapezoid", "gauss-legendre")
+
+
+def hufnagel_valley(altitude, high_altitude_wind_speed=21.0, cn2_at_1m=1.7e-14):
+    r"""Hufnagel-Valley refractive-index structure parameter profile.
+
+    Parameters
+    ----------
+    altitude : float or xr.DataArray
+        Height above the ground. [m]
+    high_altitude_wind_speed : float or xr.DataArray
+        Root-mean-square high-altitude wind speed (21 for HV 5/7). [m/s]
+    cn2_at_1m : float or xr.DataArray
+        Structure parameter near the ground, >= 0 (1.7e-14 for HV 5/7). [m^(-2/3)]
+
+    Returns
+    -------
+    float or xr.DataArray
+        :math:`C_n^2` at ``altitude``. [m^(-2/3)]
+
+    Notes
+    -----
+    Replaces IBSM Eqs. 3-6 to 3-8 (Roggemann and Welsh, Imaging Through
+    Turbulence, 1996), with :math:`h` the altitude and :math:`v` the wind speed:
+
+    .. math:: C_n^2(h) = 5.94\times10^{-53}\left(\frac{v}{27}\right)^2 h^{10} e^{-h/1000}
+              + 2.7\times10^{-16} e^{-h/1500} + C_n^2(1\,\mathrm{m})\, e^{-h/100}
+    """
+    _nonnegative("cn2_at_1m", cn2_at_1m)
+    h = altitude
+    out = (
+        5.94e-53 * (high_altitude_wind_speed / 27.0) ** 2 * h**10 * np.exp(-h / 1000.0)
+        + 2.7e-16 * np.exp(-h / 1500.0)
+        + cn2_at_1m * np.exp(-h / 100.0)
+    )
+    return _finish(out, hufnagel_valley, units="m-2/3")
+
+
+def _r0_from_integral(integral, wavelength):
+    """Spherical-wave r0 from the weighted path integral of Cn2."""
+    k = 2.0 * np.pi / wavelength
+    return (0.423 * k**2 * integral) ** (-3.0 / 5.0)
+
+
+def path_coherence_diameter(cn2, wavelength=REFERENCE_WAVELENGTH, path_dim="path"):
+    r"""Spherical-wave coherence diameter from sampled Cn2 along a path (trapezoid rule).
+
+    Parameters
+    ----------
+    cn2 : xr.DataArray
+        Structure parameter sampled along ``path_dim``, whose coordinate is the
+        distance from the target (0 at the target, the path length at the
+        sensor), increasing. [m^(-2/3)]
+    wavelength : float or xr.DataArray
+        Wavelength, > 0. [m]
+    path_dim : str
+        Name of the path dimension. Default ``"path"``.
+
+    Returns
+    -------
+    xr.DataArray
+        Fried coherence diameter r0, broadcast over every other input dimension. [m]
+
+    Notes
+    -----
+    Schmidt (2010) Eq. 9.64 for a spherical wave, replacing IBSM Eq. 3-5,
+    with :math:`z` measured from the target and :math:`L` the path length:
+
+    .. math:: r_0 = \left[0.423\,k^2 \int_0^L C_n^2(z)
+              \left(\frac{z}{L}\right)^{5/3} dz\right]^{-3/5},\quad k = 2\pi/\lambda
+
+    The integral is the trapezoid rule over the given samples, as pyBSM's
+    ``coherence_diameter``.
+    """
+    if path_dim not in cn2.dims or path_dim not in cn2.coords:
+        raise ValueError(f"cn2 must have a {path_dim!r} dimension with a distance coordinate")
+    _positive("wavelength", wavelength)
+    z = cn2[path_dim]
+    integral = (cn2 * (z / z.max()) ** (5.0 / 3.0)).integrate(path_dim)
+    out = _r0_from_integral(integral, wavelength)
+    return _finish(out, path_coherence_diameter, units="m")
+
+
+def _path_nodes(path_samples, rule):
+    """Nodes t in [0, 1] and weights of the normalised path integral."""
+    if rule == "trapezoid":
+        t = np.linspace(0.0, 1.0, path_samples)
+        w = np.full(path_samples, 1.0 / (path_samples - 1))
+        w[[0, -1]] *= 0.5
+        return t, w
+    # Gauss-Legendre in u with z = L u^2: the substitution makes the
+    # (z/L)^(5/3) weight and the near-target boundary layer smooth in u.
+    x, w = np.polynomial.legendre.leggauss(path_samples)
+    u = 0.5 * (x + 1.0)
+    return u**2, w * u  # dz/L = 2u du, du = dx/2
+
+
+def slant_path_coherence_diameter(
+    slant_range,
+    sensor_altitude,
+    target_altitude=0.0,
+    high_altitude_wind_speed=21.0,
+    cn2_at_1m=1.7e-14,
+    wavelength=REFERENCE_WAVELENGTH,
+    path_samples=64,
+    rule="gauss-legendre",
+):
+    r"""Spherical-wave coherence diameter on a curved-Earth slant path, Hufnagel-Valley Cn2.
+
+    Parameters
+    ----------
+    slant_range : float or xr.DataArray
+        Distance between target and sensor, > 0. [m]
+    sensor_altitude : float or xr.DataArray
+        Sensor height above the surface. [m]
+    target_altitude : float or xr.DataArray
+        Target height above the surface. [m]
+    high_altitude_wind_speed : float or xr.DataArray
+        Hufnagel-Valley wind speed. [m/s]
+    cn2_at_1m : float or xr.DataArray
+        Hufnagel-Valley structure parameter near the ground, > 0. [m^(-2/3)]
+    wavelength : float or xr.DataArray
+        Wavelength, > 0 (default 1 um). [m]
+    path_samples : int
+        Number of quadrature nodes along the path. [1]
+    rule : {"gauss-legendre", "trapezoid"}
+        ``"trapezoid"`` with 10000 samples reproduces pyBSM 0.16.1 (which
+        also assumes a target on the ground). ``"gauss-legendre"`` uses
+        Gauss-Legendre nodes in :math:`u = \sqrt{z/L}`; with the default 64
+        nodes its error is below 1e-9 relative for the cases in
+        ``docs/otf.md`` where the pyBSM trapezoid is off by up to 1e-6.
+
+    Returns
+    -------
+    xr.DataArray
+        Fried coherence diameter r0, broadcast over the scenario dimensions. [m]
+
+    Notes
+    -----
+    Schmidt (2010) Eq. 9.64 for a spherical wave (replacing IBSM Eq. 3-5) with
+    :math:`C_n^2(h(z))` from :func:`hufnagel_valley` and :math:`h(z)` the
+    height above the spherical Earth at distance :math:`z` from the target
+    (:func:`xbsm.geometry.altitude_along_path`):
+
+    .. math:: r_0 = \left[0.423\,k^2 L \int_0^1 C_n^2(h(tL))\, t^{5/3}\, dt\right]^{-3/5}
+    """
+    if rule not in PATH_RULES:
+        raise ValueError(f"rule must be one of {PATH_RULES}; got {rule!r}")
+    if isinstance(path_samples, bool) or not isinstance(path_samples, (int, np.integer)):
+        raise ValueError(f"path_samples must be an integer >= 2; got {path_samples!r}")
+    _require("path_samples", path_samples, lambda a: a >= 2, "an integer >= 2")
+    _positive("slant_range", slant_range)
+    _positive("cn2_at_1m", cn2_at_1m)
+    _positive("wavelength", wavelength)
+    t, w = _path_nodes(int(path_samples), rule)
+    t = xr.DataArray(t, dims="path")
+    w = xr.DataArray(w, dims="path")
+    heights = altitude_along_path(t * slant_range, slant_range, sensor_altitude, target_altitude)
+    cn2 = hufnagel_valley(heights, high_altitude_wind_speed, cn2_at_1m)
+    integral = xr.dot(cn2, w * t ** (5.0 / 3.0), dim="path") * slant_range
+    out = _r0_from_integral(integral, wavelength)
+    return _finish(out, slant_path_coherence_diameter, units="m")
+
+
+def scale_coherence_diameter(
+    coherence_diameter, wavelength, reference_wavelength=REFERENCE_WAVELENGTH
+):
+    r"""Coherence diameter r0 scaled from a reference wavelength.
+
+    Parameters
+    ----------
+    coherence_diameter : float or xr.DataArray
+        r0 at ``reference_wavelength``, > 0. [m]
+    wavelength : float or xr.DataArray
+        Wavelength, > 0. [m]
+    reference_wavelength : float or xr.DataArray
+        Wavelength at which ``coherence_diameter`` is given (default 1 um). [m]
+
+    Returns
+    -------
+    float or xr.DataArray
+        r0 at ``wavelength``. [m]
+
+    Notes
+    -----
+    .. math:: r_0(\lambda) = r_0(\lambda_0)\,(\lambda/\lambda_0)^{6/5}
+    """
+    _positive("coherence_diameter", coherence_diameter)
+    _positive("wavelength", wavelength)
+    _positive("reference_wavelength", reference_wavelength)
+    out = coherence_diameter * (wavelength / reference_wavelength) ** (6.0 / 5.0)
+    return _finish(out, scale_coherence_diameter, units="m")
+
+
+def band_coherence_diameter(
+    coherence_diameter, wavelength, weights, reference_wavelength=REFERENCE_WAVELENGTH
+):
+    r"""Spectrally weighted coherence diameter over a band (pyBSM's r0_band).
+
+    Parameters
+    ----------
+    coherence_diameter : float or xr.DataArray
+        r0 at ``reference_wavelength``, > 0. [m]
+    wavelength : xr.DataArray
+        Wavelengths of the band, dimension ``wavelength``. [m]
+    weights : xr.DataArray
+        Spectral weights over ``wavelength``, normalised here. [any]
+    reference_wavelength : float or xr.DataArray
+        Wavelength at which ``coherence_diameter`` is given (default 1 um). [m]
+
+    Returns
+    -------
+    xr.DataArray
+        Weighted mean of :math:`r_0(\lambda)`. [m]
+
+    Notes
+    -----
+    Paper Eq. 3 applied to :math:`r_0(\lambda) = r_0(\lambda_0)(\lambda/\lambda_0)^{6/5}`:
+
+    .. math:: \bar r_0 = \sum_\lambda w(\lambda)\, r_0(\lambda)
+    """
+    r0 = scale_coherence_diameter(coherence_diameter, wavelength, reference_wavelength)
+    out = spectral_average(r0, weights)
+    return _finish(out, band_coherence_diameter, units="m")
+
+
+def turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, exposure_coefficient=0.0):
+    r"""Long- or short-exposure atmospheric turbulence OTF.
+
+    Parameters
+    ----------
+    fx, fy : xr.DataArray
+        Angular spatial frequencies, broadcast against each other. [cycles/rad]
+    wavelength : float or xr.DataArray
+        Wavelength, > 0. [m]
+    aperture_diameter : float or xr.DataArray
+        Effective entrance-pupil diameter, > 0. [m]
+    coherence_diameter : float or xr.DataArray
+        Fried coherence diameter r0 at ``wavelength``, > 0. [m]
+    exposure_coefficient : float or xr.DataArray
+        0 for long exposure, 0.5 for short exposure (tilt removed), in [0, 1]. [1]
+
+    Returns
+    -------
+    xr.DataArray
+        Real OTF, broadcast over every input dimension. [1]
+
+    Notes
+    -----
+    IBSM Eq. 3-3, with :math:`\alpha` the exposure coefficient:
+
+    .. math:: H = \exp\left\{-3.44\left(\frac{\lambda\rho}{r_0}\right)^{5/3}
+              \left[1 - \alpha\left(\frac{\lambda\rho}{D}\right)^{1/3}\right]\right\}
+
+    The short-exposure form is meant for :math:`\rho \le D/\lambda`; beyond
+    :math:`\rho = D/(\alpha^3\lambda)` it exceeds 1 (not clipped, as in pyBSM;
+    the aperture OTF is zero there).
+    """
+    _positive("wavelength", wavelength)
+    _positive("aperture_diameter", aperture_diameter)
+    _positive("coherence_diameter", coherence_diameter)
+    _require(
+        "exposure_coefficient", exposure_coefficient, lambda a: (a >= 0) & (a <= 1), "in [0, 1]"
+    )
+    rho = np.hypot(fx, fy)
+    out = np.exp(
+        -3.44
+        * (wavelength / coherence_diameter * rho) ** (5.0 / 3.0)
+        * (1.0 - exposure_coefficient * (wavelength / aperture_diameter * rho) ** (1.0 / 3.0))
+    )
+    return _finish(out, turbulence)
+
+
+def wind_blended_turbulence(
+    fx, fy, wavelength, aperture_diameter, coherence_diameter, integration_time, wind_speed
+):
+    r"""Turbulence OTF blended between short and long exposure by the wind-driven decorrelation.
+
+    Parameters
+    ----------
+    fx, fy : xr.DataArray
+        Angular spatial frequencies, broadcast against each other. [cycles/rad]
+    wavelength : float or xr.DataArray
+        Wavelength, > 0. [m]
+    aperture_diameter : float or xr.DataArray
+        Effective entrance-pupil diameter, > 0. [m]
+    coherence_diameter : float or xr.DataArray
+        Fried coherence diameter r0 at ``wavelength``, > 0. [m]
+    integration_time : float or xr.DataArray
+        Dwell (integration) time, >= 0 (times the TDI stages for TDI). [s]
+    wind_speed : float or xr.DataArray
+        Apparent transverse wind speed across the path (e.g. the platform
+        speed), >= 0. [m/s]
+
+    Returns
+    -------
+    xr.DataArray
+        Real OTF, broadcast over every input dimension. [1]
+
+    Notes
+    -----
+    IBSM Eq. 3-9, with :math:`H_\alpha` from :func:`turbulence`:
+
+    .. math:: H = w H_{0.5} + (1 - w) H_0,\quad w = e^{-v t / r_0}
+    """
+    _nonnegative("integration_time", integration_time)
+    _nonnegative("wind_speed", wind_speed)
+    weight = np.exp(-wind_speed * integration_time / coherence_diameter)
+    short = turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, 0.5)
+    long = turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, 0.0)
+    out = weight * short + (1.0 - weight) * long
+    return _finish(out, wind_blended_turbulence)
+
+
+def polychromatic_turbulence(
+    fx,
+    fy,
+    wavelength,
+    weights,
+    aperture_diameter,
+    coherence_diameter,
+    integration_time,
+    wind_speed,
+    reference_wavelength=REFERENCE_WAVELENGTH,
+):
+    r"""Spectrally weighted wind-blended turbulence OTF.
+
+    Parameters
+    ----------
+    fx, fy : xr.DataArray
+        Angular spatial frequencies, broadcast against each other. [cycles/rad]
+    wavelength : xr.DataArray
+        Wavelengths of the band, dimension ``wavelength``. [m]
+    weights : xr.DataArray
+        Spectral weights over ``wavelength``, normalised here. [any]
+    aperture_diameter : float or xr.DataArray
+        Effective entrance-pupil diameter, > 0. [m]
+    coherence_diameter : float or xr.DataArray
+        r0 at ``reference_wavelength`` (e.g. from
+        :func:`slant_path_coherence_diameter`), > 0. [m]
+    integration_time : float or xr.DataArray
+        Dwell (integration) time, >= 0. [s]
+    wind_speed : float or xr.DataArray
+        Apparent transverse wind speed, >= 0. [m/s]
+    reference_wavelength : float or xr.DataArray
+        Wavelength at which ``coherence_diameter`` is given (default 1 um). [m]
+
+    Returns
+    -------
+    xr.DataArray
+        Real OTF with ``wavelength`` reduced. [1]
+
+    Notes
+    -----
+    Paper Eq. 3 over IBSM Eq. 3-9, with :math:`r_0(\lambda) \propto \lambda^{6/5}`:
+
+    .. math:: H = \sum_\lambda w(\lambda)\, H_{3\text{-}9}\big(\lambda, r_0(\lambda)\big)
+
+    pyBSM's ``polychromatic_turbulence_OTF`` also integrates r0 on the path;
+    here that is :func:`slant_path_coherence_diameter` and the band r0 is
+    :func:`band_coherence_diameter`.
+    """
+    r0 = scale_coherence_diameter(coherence_diameter, wavelength, reference_wavelength)
+    mono = wind_blended_turbulence(
+        fx, fy, wavelength, aperture_diameter, r0, integration_time, wind_speed
+    )
+    out = spectral_average(mono, weights)
+    return _finish(out, polychromatic_turbulence)
