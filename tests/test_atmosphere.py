@@ -1,0 +1,372 @@
+"""Tests of xbsm.atmosphere: the database cube and per-scenario interpolation."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import zlib
+from pathlib import Path
+
+import dask
+import dask.array as da
+import netCDF4
+import numpy as np
+import pytest
+import xarray as xr
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from xbsm import atmosphere as atm
+from xbsm.flags import FLAGS, has_flag
+
+FIXTURES = Path(__file__).parent / "fixtures"
+IHAZE_TO_VISIBILITY = {1: 23.0, 2: 5.0}
+
+
+@pytest.fixture(scope="module")
+def db():
+    return atm._load_database(str(atm.database_path()))
+
+
+@pytest.fixture(scope="module")
+def raw_cube():
+    with netCDF4.Dataset(atm.database_path()) as nc:
+        nc.set_auto_maskandscale(False)
+        return nc["atmosphere"][...]
+
+
+def _raising_scheduler(*args, **kwargs):
+    raise RuntimeError("dask computed something")
+
+
+# --- the file ---------------------------------------------------------------------------
+
+
+def test_cube_holds_every_database_spectrum_bit_for_bit_and_nothing_else(raw_cube):
+    # tests/fixtures/atmosphere_checksums.json: made by recipes/build_atmosphere.py from
+    # the raw .bin files of the pyBSM 0.16.1 wheel
+    fixture = json.loads((FIXTURES / "atmosphere_checksums.json").read_text())
+    with netCDF4.Dataset(atm.database_path()) as nc:
+        ihaze = list(nc["ihaze"][:])
+        altitude = list(nc["altitude"][:])
+    assert raw_cube.dtype == np.float32
+    assert raw_cube.shape == (2, 24, 97, 5, 1371)
+    n = 0
+    for slab in fixture["slabs"]:
+        v, a = ihaze.index(slab["ihaze"]), altitude.index(slab["altitude"])
+        k = slab["n_ground_range"]
+        present = raw_cube[v, a, :k]
+        assert hashlib.sha256(present.tobytes()).hexdigest() == slab["sha256"]
+        crcs = [f"{zlib.crc32(spectrum.tobytes()):08x}" for spectrum in present]
+        assert crcs == slab["crc32"]
+        assert not np.isnan(present).any()
+        assert np.isnan(raw_cube[v, a, k:]).all()  # beyond the horizon: nothing
+        n += k
+    assert n == fixture["n_spectra"] == 3430
+    assert np.count_nonzero(~np.isnan(raw_cube[..., 0, 0])) == 3430
+
+
+def test_cube_raw_samples_match_the_database_values(raw_cube):
+    fixture = json.loads((FIXTURES / "atmosphere_checksums.json").read_text())
+    with netCDF4.Dataset(atm.database_path()) as nc:
+        ihaze, alt, gr = (list(nc[n][:]) for n in ("ihaze", "altitude", "ground_range"))
+    for s in fixture["samples"]:
+        value = raw_cube[ihaze.index(s["ihaze"]), alt.index(s["altitude"]),
+                         gr.index(s["ground_range"]), atm.COMPONENTS.index(s["component"]),
+                         s["wavelength_index"]]
+        assert value.tobytes().hex() == s["float32_hex"]
+
+
+def test_file_coordinates_units_and_provenance():
+    with netCDF4.Dataset(atm.database_path()) as nc:
+        assert list(nc["visibility"][:]) == [23.0, 5.0]
+        assert nc["visibility"].units == "km"
+        assert list(nc["ihaze"][:]) == [1, 2]
+        altitude = nc["altitude"][:]
+        expected = np.concatenate([[2, 32.5, 75, 150, 225, 500], np.arange(1000, 12001, 1000),
+                                   np.arange(14000, 20001, 2000), [24500, 550000]])
+        np.testing.assert_array_equal(altitude, expected)  # 32.5 m as in the decoder
+        ground_range = nc["ground_range"][:]
+        assert ground_range.size == 97 and ground_range[0] == 0 and ground_range[-1] == 3e5
+        wavelength = nc["wavelength"][:]
+        assert wavelength.dtype == np.float64
+        assert np.array_equal(wavelength, 1e-6 * np.linspace(0.3, 14.0, 1371))
+        assert all(nc[c].units == "m" for c in ("altitude", "ground_range", "wavelength"))
+        assert list(nc["component"][:]) == list(atm.COMPONENTS)
+        assert list(nc["component_units"][:]) == ["1"] + ["W sr-1 cm-2 um-1"] * 4
+        var = nc["atmosphere"]
+        assert var.filters()["zlib"] and var.filters()["shuffle"]
+        assert "long_name" in var.ncattrs()
+        attrs = nc.__dict__
+    assert attrs["Conventions"].startswith("CF-")
+    assert "Apache-2.0" in attrs["license"]
+    assert "pyBSM 0.16.1" in attrs["source"]
+    assert attrs["modtran_version"] == "5.2.1"
+    assert attrs["modtran_IDAY"].startswith("236")
+    assert attrs["modtran_PARM2"].startswith("50")
+
+
+# --- open_atmosphere ---------------------------------------------------------------------
+
+
+def test_open_atmosphere_is_lazy_and_in_si_units_by_pybsms_float32_rule(raw_cube):
+    with dask.config.set(scheduler=_raising_scheduler):
+        ds = atm.open_atmosphere()
+        assert isinstance(ds["atmosphere"].data, da.Array)
+        assert list(ds["component_units"].values) == ["1"] + ["W m-2 sr-1 m-1"] * 4
+        assert list(ds["ihaze"].values) == [1, 2]
+    si = ds["atmosphere"].isel(visibility=1, altitude=6).compute(scheduler="sync").values
+    raw = raw_cube[1, 6]
+    assert si.dtype == np.float32
+    assert np.array_equal(si[:, 0], raw[:, 0], equal_nan=True)  # transmission as stored
+    # pyBSM 0.16.1: float32 array / 1e-10 (NumPy 2 keeps float32)
+    expected = raw[:, 1:] / np.float32(1e-10)
+    assert np.array_equal(si[:, 1:], expected, equal_nan=True)
+
+
+def test_database_path_reports_where_it_looked(tmp_path):
+    with pytest.raises(FileNotFoundError, match="atmosphere database not found"):
+        atm.database_path(tmp_path / "missing.nc")
+
+
+# --- atmosphere_at: nodes, parity, accuracy -------------------------------------------------
+
+
+@pytest.mark.parametrize("interpolation", atm.INTERPOLATIONS)
+def test_every_interpolation_returns_database_nodes_exactly(db, interpolation):
+    v, a, g = np.nonzero(db.present)  # all 3430 tables at once
+    dim = "table"
+    result = atm.atmosphere_at(
+        xr.DataArray(db.altitude[a], dims=dim), xr.DataArray(db.ground_range[g], dims=dim),
+        xr.DataArray(db.visibility[v], dims=dim), interpolation=interpolation)
+    expected = db.cube[v, a, g].astype(np.float64)  # (table, component, wavelength)
+    for c, name in enumerate(atm.VARIABLES):
+        assert np.array_equal(result[name].transpose(dim, "wavelength").values,
+                              expected[:, c])
+    assert (result["flags"] == 0).all()
+
+
+def test_linear_reproduces_pybsm_load_database_atmosphere_bit_for_bit():
+    # tests/fixtures/atmosphere_pybsm_linear.json: pybsm.utils.load_database_atmosphere
+    # of pyBSM 0.16.1 (NumPy 2.3.5), made by recipes/pybsm_reference_atmosphere.py
+    fixture = json.loads((FIXTURES / "atmosphere_pybsm_linear.json").read_text())
+    rows = fixture["wavelength_index"]
+    for p in fixture["points"]:
+        out = atm.atmosphere_at(p["altitude"], p["ground_range"],
+                                IHAZE_TO_VISIBILITY[p["ihaze"]], interpolation="linear")
+        ours = np.stack([out[name].values[rows] for name in atm.VARIABLES], axis=1)
+        ref = np.array([[float.fromhex(x) for x in row] for row in p["values_hex"]])
+        assert np.array_equal(ours, ref), p
+
+
+def _leave_one_out(db, v, a, g, axis, rule, log_coordinate=False):
+    """Rebuild table (v, a, g) from its two neighbours along ``axis``."""
+    nodes = db.ground_range if axis == "ground_range" else db.altitude
+    i = g if axis == "ground_range" else a
+    lo, hi = ((v, a, g - 1), (v, a, g + 1)) if axis == "ground_range" else \
+        ((v, a - 1, g), (v, a + 1, g))
+    x = np.log(nodes[i - 1:i + 2]) if log_coordinate else nodes[i - 1:i + 2]
+    w = np.array([(x[1] - x[0]) / (x[2] - x[0])])
+    low, high = db.cube[lo].astype(float)[None], db.cube[hi].astype(float)[None]
+    return atm._interp(low, high, w, rule)[0]
+
+
+def _index(nodes, value):
+    return int(np.flatnonzero(nodes == value)[0])
+
+
+def test_leave_one_out_ground_range_log_beats_linear_as_documented(db):
+    # docs/atmosphere.md (recipes/atmosphere_leave_one_out.py); pyBSM notes 2.1:
+    # ihaze 2, altitude 1 km, 11 km rebuilt from the 10 and 12 km tables
+    v, a, g = 1, _index(db.altitude, 1000.0), _index(db.ground_range, 11000.0)
+    w045, w060 = 15, 30  # 0.45 um, 0.60 um
+    cols = [w045, w060]
+    comps = [0, 4]  # TRANS, GRND_RFLT (the path radiances are 0 at 0.45 um)
+    true = db.cube[v, a, g][np.ix_(comps, cols)].astype(float)
+    lin = _leave_one_out(db, v, a, g, "ground_range", "linear")[np.ix_(comps, cols)] / true - 1
+    log = _leave_one_out(db, v, a, g, "ground_range", "log")[np.ix_(comps, cols)] / true - 1
+    w045, w060 = 0, 1
+    assert db.wavelength[cols[0]] == pytest.approx(0.45e-6)
+    assert db.wavelength[cols[1]] == pytest.approx(0.6e-6)
+    assert lin[0, w045] == pytest.approx(0.4829, abs=5e-4)  # T(0.45 um) +48 %
+    assert lin[0, w060] == pytest.approx(0.2536, abs=5e-4)  # T(0.6 um) +25 %
+    assert lin[1, w060] == pytest.approx(0.2534, abs=5e-4)  # GRND_RFLT +25 %
+    assert np.all(np.abs(log) < 2e-3)  # log-linear: within 0.2 %
+
+
+def test_leave_one_out_altitude_log_value_log_altitude_beats_linear(db):
+    # TRANS at 0.6 um over every interior altitude table (<= 18 km) and ground range,
+    # both visibilities; values below 1e-3 of the spectrum maximum are not scored
+    errors = {"linear": [], "log-linear": []}
+    for v in range(2):
+        for a in range(1, 21):
+            for g in range(97):
+                if not (db.present[v, a - 1, g] and db.present[v, a + 1, g]
+                        and db.present[v, a, g]):
+                    continue
+                true = db.cube[v, a, g, 0].astype(float)
+                if true[30] < 1e-3 * true.max():
+                    continue
+                lin = _leave_one_out(db, v, a, g, "altitude", "linear")[0, 30]
+                log = _leave_one_out(db, v, a, g, "altitude", "log", True)[0, 30]
+                errors["linear"].append(abs(lin / true[30] - 1))
+                errors["log-linear"].append(abs(log / true[30] - 1))
+    lin, log = (np.array(errors[k]) for k in ("linear", "log-linear"))
+    assert np.percentile(log, 95) < 0.5 * np.percentile(lin, 95)
+    assert np.median(log) < 2.0 * np.median(lin)
+
+
+def test_log_linear_between_nodes_is_bounded_by_the_bracketing_tables(db):
+    out = atm.atmosphere_at(1500.0, 10500.0, 5.0)
+    corners = np.stack([db.cube[1, a, g].astype(float) for a in (6, 7) for g in (12, 13)])
+    values = np.stack([out[n].values for n in atm.VARIABLES])
+    assert np.all(values >= corners.min(axis=0)) and np.all(values <= corners.max(axis=0))
+
+
+# --- atmosphere_at: low altitudes, horizon, gap ---------------------------------------------
+
+
+@pytest.mark.parametrize("altitude", [2.5, 10.0, 32.55, 50.0, 74.9])
+def test_altitudes_between_2_and_75_m_interpolate(db, altitude):
+    out = atm.atmosphere_at(altitude, 1000.0, 23.0, interpolation="linear")
+    assert np.isfinite(out["transmission"]).all() and int(out["flags"]) == 0
+    nodes = db.altitude
+    a = int(np.searchsorted(nodes, altitude)) - 1
+    w = (altitude - nodes[a]) / (nodes[a + 1] - nodes[a])
+    g = _index(db.ground_range, 1000.0)
+    expected = (1 - w) * db.cube[0, a, g, 0].astype(float) + w * db.cube[0, a + 1, g, 0]
+    np.testing.assert_array_equal(out["transmission"].values, expected)
+
+
+def test_beyond_the_horizon_is_nan_and_flagged():
+    # no 1000 m table at 150 km ground range (pyBSM 0.16.1 raises IndexError here)
+    out = atm.atmosphere_at(1500.0, 150e3, 23.0)
+    assert np.isnan(out["transmission"]).all() and np.isnan(out["path_thermal"]).all()
+    assert bool(has_flag(out["flags"], "beyond_database"))
+    assert out["flags"].attrs["flag_meanings"].split()[0] == "beyond_database"
+
+
+def test_altitudes_above_24_5_km_interpolate_only_at_ground_range_zero(db):
+    out = atm.atmosphere_at(xr.DataArray([100e3, 100e3, 550e3, 550e3], dims="s"),
+                            xr.DataArray([0.0, 1000.0, 0.0, 1000.0], dims="s"), 23.0)
+    t = out["transmission"].transpose("s", "wavelength").values
+    flags = out["flags"].values
+    assert np.isfinite(t[0]).all() and np.isnan(t[1]).all()
+    assert np.array_equal(t[2], db.cube[0, -1, 0, 0].astype(float))  # 550 km node
+    assert np.isnan(t[3]).all()
+    sparse, beyond = FLAGS["atmosphere_sparse"][0], FLAGS["beyond_database"][0]
+    assert list(flags) == [sparse, sparse | beyond, 0, beyond]
+
+
+# --- atmosphere_at: errors -------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"altitude": 1.0}, r"altitude must be within \[2, 550000\] m"),
+        ({"altitude": 600e3}, r"altitude must be within \[2, 550000\] m"),
+        ({"altitude": np.nan}, r"altitude must be within"),
+        ({"ground_range": -1.0}, r"ground_range must be within \[0, 300000\] m"),
+        ({"ground_range": 301e3}, r"ground_range must be within \[0, 300000\] m"),
+        ({"visibility": 10.0}, r"visibility must be one of 23, 5 km"),
+        ({"interpolation": "cubic"}, r"interpolation must be one of"),
+        ({"altitude": 1500.0, "interpolation": "exact"},
+         r"altitude=1500.0 m is not a database node .* nearest nodes: 1000 and 2000 m"),
+        ({"ground_range": 10500.0, "interpolation": "exact"},
+         r"ground_range=10500.0 m is not a database node .* 10000 and 11000 m"),
+        ({"wavelength_bounds": (20e-6, 30e-6)}, r"wavelength_bounds must contain"),
+    ],
+)
+def test_invalid_input_raises_value_error_naming_the_parameter(kwargs, message):
+    args = {"altitude": 1000.0, "ground_range": 10000.0, "visibility": 23.0, **kwargs}
+    with pytest.raises(ValueError, match=message):
+        atm.atmosphere_at(**args)
+
+
+# --- atmosphere_at: broadcasting, band selection, laziness -------------------------------------
+
+
+def test_sweep_dimensions_named_like_the_cube_dimensions():
+    ground_range = xr.DataArray(np.linspace(0.0, 20e3, 1000), dims="ground_range")
+    visibility = xr.DataArray([5.0, 23.0], dims="visibility")
+    out = atm.atmosphere_at(5000.0, ground_range.assign_coords(ground_range=ground_range),
+                            visibility, wavelength_bounds=(0.4e-6, 0.7e-6))
+    t = out["transmission"]
+    assert set(t.dims) == {"ground_range", "visibility", "wavelength"}
+    assert t.sizes == {"ground_range": 1000, "visibility": 2, "wavelength": 31}
+    np.testing.assert_array_equal(t["ground_range"].values, ground_range.values)
+    assert out["flags"].dims == ("ground_range", "visibility")
+    single = atm.atmosphere_at(5000.0, float(ground_range[123]), 23.0,
+                               wavelength_bounds=(0.4e-6, 0.7e-6))
+    np.testing.assert_array_equal(t.isel(ground_range=123, visibility=1).values,
+                                  single["transmission"].values)
+    assert t.attrs == {"units": "1", "long_name": "atmospheric transmittance along the path"}
+    assert out["path_thermal"].attrs["units"] == "W m-2 sr-1 m-1"
+    assert out["wavelength"].attrs["units"] == "m"
+
+
+def test_altitude_sweep_named_altitude():
+    altitude = xr.DataArray([2.0, 50.0, 1234.5, 24500.0], dims="altitude")
+    out = atm.atmosphere_at(altitude, 0.0, 5.0)
+    assert out["solar_scatter"].dims == ("altitude", "wavelength")
+    assert np.isfinite(out["solar_scatter"]).all()
+
+
+def test_wavelength_bounds_select_by_exact_float_comparison_like_pybsm(db):
+    full = atm.atmosphere_at(3000.0, 7000.0, 23.0)
+    # 0.503 um snaps up to the 0.51 um sample; the float 0.6e-6 equals the sample
+    band = atm.atmosphere_at(3000.0, 7000.0, 23.0, wavelength_bounds=(0.503e-6, 0.6e-6))
+    keep = (db.wavelength >= 0.503e-6) & (db.wavelength <= 0.6e-6)
+    np.testing.assert_array_equal(band["wavelength"].values, db.wavelength[keep])
+    assert band.sizes["wavelength"] == 10
+    for name in atm.VARIABLES:
+        np.testing.assert_array_equal(band[name].values, full[name].values[keep])
+
+
+def test_dask_inputs_stay_lazy_and_equal_eager():
+    rng = np.random.default_rng(1)
+    altitude = xr.DataArray(rng.uniform(2.0, 20e3, 40), dims="scenario")
+    ground_range = xr.DataArray(rng.uniform(0.0, 40e3, 40), dims="scenario")
+    visibility = xr.DataArray([23.0, 5.0], dims="visibility")
+    bounds = (3e-6, 5e-6)
+    eager = atm.atmosphere_at(altitude, ground_range, visibility, wavelength_bounds=bounds)
+    with dask.config.set(scheduler=_raising_scheduler):
+        lazy = atm.atmosphere_at(altitude.chunk(scenario=7), ground_range.chunk(scenario=7),
+                                 visibility, wavelength_bounds=bounds)
+        assert all(isinstance(lazy[name].data, da.Array) for name in lazy.data_vars)
+    computed = lazy.compute(scheduler="sync")
+    xr.testing.assert_identical(computed, eager)
+
+
+def test_dask_inputs_outside_the_domain_raise_when_computed():
+    altitude = xr.DataArray([1000.0, 1.0], dims="s").chunk(s=1)
+    with dask.config.set(scheduler=_raising_scheduler):
+        out = atm.atmosphere_at(altitude, 0.0, 23.0)
+    with pytest.raises(ValueError, match="altitude must be within"):
+        out["transmission"].compute(scheduler="sync")
+
+
+# --- properties ------------------------------------------------------------------------
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    altitude=st.floats(2.0, 24500.0),
+    ground_range=st.floats(0.0, 300e3),
+    visibility=st.sampled_from([5.0, 23.0]),
+    interpolation=st.sampled_from(["linear", "log-linear"]),
+)
+def test_values_finite_where_unflagged_and_nan_where_flagged(
+        altitude, ground_range, visibility, interpolation):
+    out = atm.atmosphere_at(altitude, ground_range, visibility, interpolation=interpolation,
+                            wavelength_bounds=(0.4e-6, 1e-6))
+    beyond = bool(has_flag(out["flags"], "beyond_database"))
+    for name in atm.VARIABLES:
+        values = out[name].values
+        if beyond:
+            assert np.isnan(values).all()
+        else:
+            assert np.isfinite(values).all() and (values >= 0).all()
+    if not beyond:
+        assert (out["transmission"] <= 1).all()

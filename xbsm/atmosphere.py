@@ -1,0 +1,429 @@
+"""MODTRAN 5.2.1 atmosphere database: the lazy cube and per-scenario interpolation.
+
+The database (pyBSM 0.16.1's 3430 MODTRAN runs, see ``NOTICE``) is one NetCDF
+file, ``atmosphere.nc``, with a float32 variable ``atmosphere`` on the dims
+(visibility, altitude, ground_range, component, wavelength) in the database's
+native units. :func:`open_atmosphere` opens it lazily in SI units;
+:func:`atmosphere_at` returns the five spectra for any number of scenarios.
+
+Interpolation between database nodes (``interpolation=``):
+
+``"exact"``
+    Database nodes only; any other altitude or ground range raises ``ValueError``.
+``"linear"``
+    pyBSM 0.16.1's ``load_database_atmosphere`` rule, bit for bit: linear in
+    altitude at the two bracketing ground ranges, then linear in ground range.
+``"log-linear"`` (default)
+    The same two steps on the logarithm of each value (transmittance falls
+    exponentially with path length), with the altitude weight linear in
+    log(altitude); linear in the value where a bracketing value is zero. The
+    leave-one-out errors behind this choice are in ``docs/atmosphere.md``.
+
+At a database node every option returns the stored value exactly. Where a
+bracketing table is missing (beyond the horizon of the lower altitude, or above
+ground range 0 between 24.5 km and 550 km) the spectra are NaN and the
+``beyond_database`` flag is set. Altitudes strictly between 24.5 km and 550 km
+are interpolated only at ground range 0 and carry the ``atmosphere_sparse`` flag.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+
+import netCDF4
+import numpy as np
+import xarray as xr
+
+from .flags import flag, flag_attrs
+
+__all__ = [
+    "COMPONENTS",
+    "INTERPOLATIONS",
+    "VARIABLES",
+    "atmosphere_at",
+    "database_path",
+    "open_atmosphere",
+]
+
+#: MODTRAN tape 7 columns, in database order.
+COMPONENTS = ("TRANS", "PTH_THRML", "SURF_EMIS", "SOL_SCAT", "GRND_RFLT")
+#: Names of the variables returned by :func:`atmosphere_at`, one per component.
+VARIABLES = (
+    "transmission",
+    "path_thermal",
+    "surface_emission",
+    "solar_scatter",
+    "ground_reflected",
+)
+_LONG_NAMES = (
+    "atmospheric transmittance along the path",
+    "path thermal radiance (atmospheric emission and scattering)",
+    "surface emission radiance at the sensor (target at 299 K, reflectance 0.15)",
+    "path solar scattered radiance",
+    "ground reflected solar radiance at the sensor (reflectance 0.15)",
+)
+_SI_UNITS = ("1", "W m-2 sr-1 m-1", "W m-2 sr-1 m-1", "W m-2 sr-1 m-1", "W m-2 sr-1 m-1")
+#: pyBSM's conversion W/(sr cm^2 um) -> W/(m^2 sr m): the float32 value divided by
+#: float32(1e-10) in float32 (NumPy 2 keeps float32 for float32 / Python float).
+_DIVISOR = np.array([1.0, 1e-10, 1e-10, 1e-10, 1e-10], dtype=np.float32)
+#: interpolation -> (value rule in altitude, altitude coordinate, value rule in ground range)
+_RULES = MappingProxyType({
+    "exact": ("linear", "altitude", "linear"),
+    "linear": ("linear", "altitude", "linear"),
+    "log-linear": ("log", "log_altitude", "log"),
+})
+#: Accepted values of ``interpolation``.
+INTERPOLATIONS = tuple(_RULES)
+_GAP = (24500.0, 550000.0)  # altitudes with no table in between [m]
+_FILE_CHUNKS = MappingProxyType({})  # xarray: use the file's chunks
+_BLOCK = 1 << 21  # values per component gathered at a time in the kernel
+
+
+def database_path(path=None) -> Path:
+    """Path of the atmosphere database file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        Explicit file. Default: ``xbsm/data/atmosphere.nc`` (installed wheel),
+        else ``atmosphere.nc`` at the top of a source checkout.
+
+    Returns
+    -------
+    pathlib.Path
+        Resolved path of an existing file.
+    """
+    if path is not None:
+        candidates = [Path(path)]
+    else:
+        here = Path(__file__).resolve().parent
+        candidates = [here / "data" / "atmosphere.nc", here.parent / "atmosphere.nc"]
+    for candidate in candidates:
+        if candidate.is_file():
+            return candidate.resolve()
+    raise FileNotFoundError(
+        "atmosphere database not found; looked for "
+        + ", ".join(str(c) for c in candidates)
+        + " (build it with recipes/build_atmosphere.py)"
+    )
+
+
+def open_atmosphere(path=None, chunks=_FILE_CHUNKS) -> xr.Dataset:
+    """MODTRAN 5.2.1 atmosphere database in SI units, opened lazily.
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        Database file; see :func:`database_path`.
+    chunks : dict, str, int or None
+        Passed to :func:`xarray.open_dataset`. Default: the file's chunks, one
+        dask chunk per (visibility, altitude). ``None`` loads numpy arrays.
+
+    Returns
+    -------
+    xr.Dataset
+        Variable ``atmosphere`` (float32) on (visibility, altitude, ground_range,
+        component, wavelength); per-component units in the coordinate
+        ``component_units``: transmittance [1], radiances [W m-2 sr-1 m-1].
+        NaN where the database has no entry.
+
+    Notes
+    -----
+    Radiances are converted exactly as pyBSM 0.16.1 does, ``raw / float32(1e-10)``
+    in float32, so the numbers are bit-identical to pyBSM's. Transmittance is the
+    stored value.
+    """
+    file = database_path(path)
+    if isinstance(chunks, MappingProxyType):
+        with netCDF4.Dataset(file) as nc:
+            chunks = dict(zip(nc["atmosphere"].dimensions, nc["atmosphere"].chunking(),
+                              strict=True))
+    # open without dask, load the small coordinates, then chunk only the cube, so
+    # that reading coordinates never needs a dask compute
+    ds = xr.open_dataset(file, engine="netcdf4", chunks=None)
+    ds = ds.assign_coords({name: ds[name].load() for name in ds.coords})
+    raw = ds["atmosphere"] if chunks is None else ds["atmosphere"].chunk(chunks)
+    divisor = xr.DataArray(_DIVISOR, dims="component")
+    si = (raw / divisor).astype(np.float32)
+    si.attrs = {
+        "long_name": "MODTRAN 5.2.1 path transmittance and radiance components",
+        "comment": "units by component in component_units; radiances are the database's "
+                   "W sr-1 cm-2 um-1 divided by float32(1e-10) in float32 (pyBSM's rule); "
+                   "NaN where the database has no entry",
+    }
+    ds = ds.assign(atmosphere=si)
+    return ds.assign_coords(
+        component_units=("component", np.array(_SI_UNITS, dtype=object),
+                         ds["component_units"].attrs),
+    )
+
+
+@dataclass(frozen=True)
+class _Database:
+    """The whole database as numpy arrays (SI, float32)."""
+
+    visibility: np.ndarray  # [km]
+    altitude: np.ndarray  # [m]
+    ground_range: np.ndarray  # [m]
+    wavelength: np.ndarray  # [m]
+    cube: np.ndarray  # (visibility, altitude, ground_range, component, wavelength)
+    present: np.ndarray  # (visibility, altitude, ground_range) bool
+
+
+@functools.lru_cache(maxsize=4)
+def _load_database(path: str) -> _Database:
+    """Read the database into memory once per process (no dask involved)."""
+    with netCDF4.Dataset(path) as nc:
+        nc.set_auto_maskandscale(False)
+        cube = nc["atmosphere"][...]
+        coords = {name: np.asarray(nc[name][...], dtype=np.float64)
+                  for name in ("visibility", "altitude", "ground_range", "wavelength")}
+    cube = np.ascontiguousarray(cube, dtype=np.float32)
+    cube /= _DIVISOR[:, None]  # float32 / float32: pyBSM's bits; NaN stays NaN
+    present = ~np.isnan(cube[:, :, :, 0, 0])
+    cube.setflags(write=False)
+    present.setflags(write=False)
+    return _Database(cube=cube, present=present, **coords)
+
+
+def _bracket(values, nodes, log=False):
+    """Lower/upper node index and weight of the upper node (0 exactly on a node).
+
+    The weight is ``(x - x0) / (x1 - x0)``, pyBSM's expression, with ``x`` the
+    value itself or, if ``log``, its logarithm.
+    """
+    lower = np.clip(np.searchsorted(nodes, values, side="right") - 1, 0, nodes.size - 1)
+    on_node = nodes[lower] == values
+    upper = np.where(on_node, lower, np.minimum(lower + 1, nodes.size - 1))
+    x, x0, x1 = values, nodes[lower], nodes[upper]
+    if log:
+        x, x0, x1 = np.log(x), np.log(x0), np.log(x1)
+    span = np.where(on_node, 1.0, x1 - x0)
+    weight = np.where(on_node, 0.0, (x - x0) / span)
+    return lower, upper, weight
+
+
+def _interp(low, high, weight, rule):
+    """One interpolation step between two gathered spectra (weight of ``high``).
+
+    Linear: ``(1 - w) * low + w * high``, pyBSM's expression and operation order.
+    Log: ``low * exp(w * (log(high) - log(low)))`` where both are positive, which
+    returns ``low`` exactly when ``w == 0`` or ``high is low``; linear elsewhere.
+    """
+    w = weight[:, None, None]
+    linear = (1.0 - w) * low + w * high
+    if rule == "linear":
+        return linear
+    positive = (low > 0.0) & (high > 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        log_step = np.log(high) - np.log(low)
+        logged = low * np.exp(w * log_step)
+    return np.where(positive, logged, linear)
+
+
+def _nearest_nodes(value, nodes):
+    """Text naming the database nodes on either side of ``value``."""
+    i = int(np.searchsorted(nodes, value))
+    around = nodes[max(i - 1, 0): i + 1]
+    return " and ".join(f"{n:g}" for n in around)
+
+
+def _validate(altitude, ground_range, visibility, interpolation, db):
+    """Raise ValueError for inputs outside the database domain (numpy arrays)."""
+    checks = (
+        ("altitude", altitude, db.altitude, "m"),
+        ("ground_range", ground_range, db.ground_range, "m"),
+    )
+    for name, values, nodes, units in checks:
+        bad = ~((values >= nodes[0]) & (values <= nodes[-1]))
+        if bad.any():
+            raise ValueError(
+                f"{name} must be within [{nodes[0]:g}, {nodes[-1]:g}] {units} (the MODTRAN "
+                f"database range); got {float(values[bad].flat[0])!r}"
+            )
+        if interpolation == "exact":
+            off = ~np.isin(values, nodes)
+            if off.any():
+                value = values[off].flat[0]
+                raise ValueError(
+                    f"{name}={float(value)!r} {units} is not a database node "
+                    f"(interpolation='exact'); nearest nodes: "
+                    f"{_nearest_nodes(value, nodes)} {units}"
+                )
+    bad = ~np.isin(visibility, db.visibility)
+    if bad.any():
+        raise ValueError(
+            "visibility must be one of "
+            + ", ".join(f"{v:g}" for v in db.visibility)
+            + f" km (MODTRAN IHAZE 1, 2); got {float(visibility[bad].flat[0])!r}"
+        )
+
+
+def _locate(altitude, ground_range, visibility, db, log_altitude=False):
+    """Visibility index and the altitude / ground-range brackets of each scenario."""
+    vis = np.searchsorted(-db.visibility, -visibility)  # visibility is descending
+    alt = _bracket(altitude, db.altitude, log=log_altitude)
+    gr = _bracket(ground_range, db.ground_range)
+    return vis, alt, gr
+
+
+def _flags_kernel(altitude, ground_range, visibility, *, path, interpolation):
+    """Compute the validity flags of each scenario (numpy kernel)."""
+    db = _load_database(path)
+    altitude, ground_range, visibility = (
+        np.asarray(a, dtype=np.float64) for a in
+        np.broadcast_arrays(altitude, ground_range, visibility))
+    _validate(altitude, ground_range, visibility, interpolation, db)
+    vis, (a0, a1, _), (g0, g1, _) = _locate(altitude, ground_range, visibility, db)
+    p = db.present
+    complete = p[vis, a0, g0] & p[vis, a1, g0] & p[vis, a0, g1] & p[vis, a1, g1]
+    out = np.where(complete, 0, flag("beyond_database"))
+    sparse = (altitude > _GAP[0]) & (altitude < _GAP[1])
+    return (out | np.where(sparse, flag("atmosphere_sparse"), 0)).astype(np.int32)
+
+
+def _spectra_kernel(altitude, ground_range, visibility, *, path, interpolation, window):
+    """Interpolated spectra, shape (..., component, wavelength) (numpy kernel)."""
+    db = _load_database(path)
+    altitude, ground_range, visibility = (
+        np.asarray(a, dtype=np.float64) for a in
+        np.broadcast_arrays(altitude, ground_range, visibility))
+    _validate(altitude, ground_range, visibility, interpolation, db)
+    shape = altitude.shape
+    alt_rule, alt_coord, gr_rule = _RULES[interpolation]
+    vis, alt, gr = _locate(altitude.ravel(), ground_range.ravel(), visibility.ravel(), db,
+                           log_altitude=alt_coord == "log_altitude")
+    (a0, a1, wa), (g0, g1, wg) = alt, gr
+    cube = db.cube[..., window]
+    n_comp, n_wl = cube.shape[-2:]
+    out = np.empty((vis.size, n_comp, n_wl), dtype=np.float64)
+    step = max(1, _BLOCK // max(1, n_comp * n_wl))
+    for start in range(0, vis.size, step):  # blocks of scenarios bound the memory
+        s = slice(start, start + step)
+        v = vis[s]
+
+        def at(a, g, v=v):
+            return cube[v, a, g].astype(np.float64)
+
+        low_gr = _interp(at(a0[s], g0[s]), at(a1[s], g0[s]), wa[s], alt_rule)
+        high_gr = _interp(at(a0[s], g1[s]), at(a1[s], g1[s]), wa[s], alt_rule)
+        out[s] = _interp(low_gr, high_gr, wg[s], gr_rule)
+    return out.reshape(shape + (n_comp, n_wl))
+
+
+def _as_input(value, name):
+    """Convert a float or DataArray input to a float64 DataArray."""
+    if isinstance(value, xr.DataArray):
+        for dim in ("wavelength", "component"):
+            if dim in value.dims:
+                raise ValueError(f"{name} must not have the dimension {dim!r}")
+        if not np.issubdtype(value.dtype, np.number):
+            raise ValueError(f"{name} must be numeric; got dtype {value.dtype}")
+        return value.astype(np.float64)
+    return xr.DataArray(np.float64(value))
+
+
+def _wavelength_window(wavelength, bounds):
+    """Slice of wavelengths ``lo <= w <= hi`` (exact float comparison)."""
+    if bounds is None:
+        return slice(None)
+    lo, hi = (float(b) for b in bounds)
+    index = np.flatnonzero((wavelength >= lo) & (wavelength <= hi))
+    if index.size == 0:
+        raise ValueError(
+            f"wavelength_bounds must contain a database wavelength in "
+            f"[{wavelength[0]:g}, {wavelength[-1]:g}] m; got ({lo!r}, {hi!r})"
+        )
+    return slice(int(index[0]), int(index[-1]) + 1)
+
+
+def atmosphere_at(altitude, ground_range, visibility, *, interpolation="log-linear",
+                  wavelength_bounds=None, path=None) -> xr.Dataset:
+    """Atmospheric transmittance and path radiances for each scenario.
+
+    Parameters
+    ----------
+    altitude : float or xr.DataArray
+        Sensor altitude above ground level, within [2, 550000]. [m]
+    ground_range : float or xr.DataArray
+        Ground range from the sensor nadir point to the target, within [0, 300000]. [m]
+    visibility : float or xr.DataArray
+        Meteorological range: 23 (MODTRAN IHAZE 1) or 5 (IHAZE 2). [km]
+    interpolation : {"log-linear", "linear", "exact"}
+        Rule between database nodes; see the module docstring.
+    wavelength_bounds : tuple of float, optional
+        ``(lo, hi)``: keep the database wavelengths ``lo <= w <= hi`` (exact float
+        comparison, as pyBSM selects a band); only these are interpolated. [m]
+    path : str or os.PathLike, optional
+        Database file; see :func:`database_path`.
+
+    Returns
+    -------
+    xr.Dataset
+        float64 ``transmission`` [1], ``path_thermal``, ``surface_emission``,
+        ``solar_scatter``, ``ground_reflected`` [W m-2 sr-1 m-1] on the union of
+        the input dimensions plus ``wavelength``, and int32 ``flags`` (CF flag
+        variable; ``beyond_database`` where the spectra are NaN,
+        ``atmosphere_sparse`` between 24.5 km and 550 km).
+
+    Raises
+    ------
+    ValueError
+        An input outside the database domain, an off-node input with
+        ``interpolation="exact"``, or an unknown ``interpolation``. With
+        dask-backed inputs the values are checked when the result is computed.
+
+    Notes
+    -----
+    Inputs may carry any dimensions, including ones named like the database
+    dimensions (``ground_range``, ``altitude``, ``visibility``). Dask-backed
+    inputs give dask-backed results; nothing is computed until asked. The
+    database itself is read into memory once per process (netCDF4, no dask).
+    """
+    if interpolation not in _RULES:
+        raise ValueError(
+            f"interpolation must be one of {', '.join(map(repr, INTERPOLATIONS))}; "
+            f"got {interpolation!r}"
+        )
+    file = str(database_path(path))
+    db = _load_database(file)
+    window = _wavelength_window(db.wavelength, wavelength_bounds)
+    wavelength = db.wavelength[window]
+    inputs = [_as_input(altitude, "altitude"), _as_input(ground_range, "ground_range"),
+              _as_input(visibility, "visibility")]
+    if not any(a.chunks is not None for a in inputs):
+        # eager inputs: fail at the call, not inside the kernel
+        _validate(*(np.asarray(a.values) for a in inputs), interpolation, db)
+
+    kwargs = {"path": file, "interpolation": interpolation}
+    spectra = xr.apply_ufunc(
+        _spectra_kernel, *inputs,
+        kwargs={**kwargs, "window": window},
+        output_core_dims=[["component", "wavelength"]],
+        dask="parallelized",
+        output_dtypes=[np.float64],
+        dask_gufunc_kwargs={"output_sizes": {"component": len(COMPONENTS),
+                                             "wavelength": wavelength.size}},
+        keep_attrs=False,
+    )
+    flags = xr.apply_ufunc(
+        _flags_kernel, *inputs, kwargs=kwargs, dask="parallelized",
+        output_dtypes=[np.int32], keep_attrs=False,
+    )
+    wl = xr.DataArray(wavelength, dims="wavelength",
+                      attrs={"units": "m", "long_name": "wavelength",
+                             "standard_name": "radiation_wavelength"})
+    described = zip(VARIABLES, _LONG_NAMES, _SI_UNITS, strict=True)
+    data = {
+        name: spectra.isel(component=i, drop=True).assign_attrs(units=units, long_name=long_name)
+        for i, (name, long_name, units) in enumerate(described)
+    }
+    data["flags"] = flags.assign_attrs(flag_attrs("atmosphere validity flags"))
+    out = xr.Dataset(data).assign_coords(wavelength=wl)
+    return out.assign_attrs(
+        source="MODTRAN 5.2.1 database of pyBSM 0.16.1 (xbsm atmosphere.nc)",
+        interpolation=interpolation,
+    )
