@@ -1,1 +1,27 @@
-"""xbsm: an xarray-based electro-optical imaging system performance model."""
+"""xbsm: an xarray-based electro-optical imaging system performance model.
+
+Public entry points::
+
+    atm = xbsm.open_atmosphere()
+    s = xbsm.sensor(aperture_diameter=..., focal_length=..., ...)
+    sc = xbsm.scenario(altitude=..., ground_range=..., visibility=...)
+    r = xbsm.snr(s, sc)
+    n = xbsm.niirs(s, sc)
+"""
+
+from . import pybsm_compat
+from .atmosphere import open_atmosphere
+from .methods import Method, method
+from .model import snr
+from .params import scenario, sensor
+
+__all__ = [
+    "Method",
+    "method",
+    "open_atmosphere",
+    "pybsm_compat",
+    "scenario",
+    "sensor",
+    "snr",
+]
+__version__ = "0.1.0"

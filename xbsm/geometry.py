@@ -78,10 +78,12 @@ def nadir_angle(slant_range, sensor_altitude, target_altitude=0.0):
 
 
 def elevation_angle(slant_range, sensor_altitude, target_altitude=0.0):
-    """Look angle above the local horizontal, :math:`\\pi/2` minus the nadir angle.
+    """Look-down angle of the line of sight below the sensor's horizontal.
 
-    This is the GIQE "elevation angle" (pyBSM's convention): measured at the
-    sensor, so it equals the target's elevation only over a flat Earth.
+    :math:`\\pi/2` minus the nadir angle: the GIQE "elevation angle" in pyBSM's
+    convention. Measured at the sensor, it equals the sensor's elevation seen
+    from the target only over a flat Earth (at the horizon it is the central
+    angle, not 0).
 
     Parameters
     ----------
@@ -168,3 +170,33 @@ def ground_sample_distance(ifov, slant_range):
         Ground sample distance. [m]
     """
     return _attrs(ifov * slant_range, "m", "ground sample distance")
+
+
+def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0):
+    """Elevation of the sensor above the target's local horizontal.
+
+    Parameters
+    ----------
+    slant_range : float or xr.DataArray
+        Distance between target and sensor. [m]
+    sensor_altitude : float or xr.DataArray
+        Sensor height above the surface. [m]
+    target_altitude : float or xr.DataArray
+        Target height above the surface. [m]
+
+    Returns
+    -------
+    float or xr.DataArray
+        Elevation angle seen from the target; 0 at the geometric horizon. [rad]
+
+    Notes
+    -----
+    The angle that projects the image-plane GSD onto the ground. It is the
+    sensor look-down angle (:func:`elevation_angle`) minus the central angle
+    between sensor and target.
+    """
+    a = EARTH_RADIUS + sensor_altitude
+    c = EARTH_RADIUS + target_altitude
+    cosine = (a**2.0 - c**2.0 - slant_range**2.0) / (2.0 * c * slant_range)
+    out = np.arcsin(np.clip(cosine, -1.0, 1.0))
+    return _attrs(out, "rad", "elevation angle at the target")

@@ -1,0 +1,81 @@
+import numpy as np
+import pytest
+import xarray as xr
+
+from xbsm import geometry
+from xbsm.constants import EARTH_RADIUS
+
+
+def test_slant_range_reference_case():
+    # pybsm_test_cases.md D25: curved_earth_slant_range(0, 1, 1) = sqrt(2) (pyBSM 0.16.1)
+    assert geometry.slant_range(1.0, 1.0, 0.0) == pytest.approx(1.4142135623730951, rel=1e-12)
+
+
+def test_nadir_angle_reference_case():
+    # pybsm_test_cases.md D25: nadir_angle(h_target=1, h_sensor=1, slant_range=1)
+    assert geometry.nadir_angle(1.0, 1.0, 1.0) == pytest.approx(1.5707962484024436, rel=1e-12)
+
+
+def test_olson_slant_range_and_elevation():
+    # pybsm_test_cases.md A5 (pyBSM 0.16.1): 9 km altitude, 20 km ground range
+    r = geometry.slant_range(20000.0, 9000.0)
+    assert r == pytest.approx(21944.568747898647, rel=1e-13)
+    assert geometry.elevation_angle(r, 9000.0) == pytest.approx(0.42415759925816854, rel=1e-9)
+
+
+def test_nadir_look_is_vertical_without_nan():
+    r = geometry.slant_range(0.0, 9000.0)
+    assert r == pytest.approx(9000.0, rel=1e-12)
+    assert geometry.elevation_angle(r, 9000.0) == pytest.approx(np.pi / 2, abs=1e-7)
+
+
+def test_flat_earth_limit_for_short_ranges():
+    # for ground range << R_e the slant range tends to sqrt(h^2 + g^2)
+    r = geometry.slant_range(1000.0, 1000.0)
+    assert r == pytest.approx(np.hypot(1000.0, 1000.0), rel=1e-4)
+
+
+def test_altitude_along_path_ends():
+    r = geometry.slant_range(50e3, 10e3)
+    assert geometry.altitude_along_path(0.0, r, 10e3) == pytest.approx(0.0, abs=1e-6)
+    assert geometry.altitude_along_path(r, r, 10e3) == pytest.approx(10e3, rel=1e-12)
+
+
+def test_horizon_geometry():
+    # at the geometric horizon the line of sight grazes the target: the look angle below the
+    # sensor's horizontal equals the central angle theta, cos(theta) = R / (R + h)
+    h = 10e3
+    theta = np.arccos(EARTH_RADIUS / (EARTH_RADIUS + h))
+    r = geometry.slant_range(theta * EARTH_RADIUS, h)
+    assert geometry.elevation_angle(r, h) == pytest.approx(theta, rel=1e-6)
+
+
+def test_broadcasts_over_sweep_dims():
+    gr = xr.DataArray(np.linspace(0, 1e5, 5), dims="ground_range")
+    h = xr.DataArray([1e3, 1e4], dims="altitude")
+    r = geometry.slant_range(gr, h)
+    assert set(r.dims) == {"ground_range", "altitude"}
+    assert r.attrs["units"] == "m"
+
+
+def test_gsd_and_ifov():
+    ifov = geometry.ifov(8e-6, 4.0)
+    assert ifov == pytest.approx(2e-6)
+    gsd = geometry.ground_sample_distance(ifov, 21944.568747898647)
+    # pybsm_test_cases.md A5: GIQE-5 gsd_w = gsd / sin(elevation)^(1/4) = 0.05479621447912214
+    assert gsd / np.sin(0.42415759925816854) ** 0.25 == pytest.approx(0.05479621447912214, rel=1e-12)
+
+
+def test_target_elevation_zero_at_horizon_and_vertical_at_nadir():
+    h = 10e3
+    theta = np.arccos(EARTH_RADIUS / (EARTH_RADIUS + h))
+    r = geometry.slant_range(theta * EARTH_RADIUS, h)
+    assert geometry.target_elevation_angle(r, h) == pytest.approx(0.0, abs=1e-6)
+    assert geometry.target_elevation_angle(h, h) == pytest.approx(np.pi / 2, abs=1e-7)
+
+
+def test_target_elevation_is_look_down_minus_central_angle():
+    g, h = 80e3, 9e3
+    r = geometry.slant_range(g, h)
+    expected = geometry.elevation_angle(r, h) - g / EARTH_RADIUS
+    assert geometry.target_elevation_angle(r, h) == pytest.approx(expected, rel=1e-9)

@@ -1,0 +1,139 @@
+import dask.array as dsa
+import numpy as np
+import pytest
+import xarray as xr
+
+import xbsm
+from xbsm import pybsm_compat as compat
+
+BASE = dict(aperture_diameter=0.275, focal_length=4.0, pixel_pitch_x=8e-6,
+            wavelength_min=0.5e-6, wavelength_max=0.66e-6)
+
+
+def test_sensor_defaults_follow_pybsm():
+    s = xbsm.sensor(**BASE)
+    # pyBSM 0.16.1 Sensor defaults (simulation/sensor.py): int_time 1, max_n 1e8, bit_depth 100
+    assert float(s.integration_time) == 1.0
+    assert float(s.max_well) == 1e8
+    assert float(s.bit_depth) == 100.0
+    assert float(s.detector_width_y) == 8e-6
+    assert float(s.wavefront_correlation_length_x) == 0.275
+    assert s.aperture_diameter.attrs["units"] == "m"
+    assert s.filter_kernel.shape == (1, 1)
+
+
+def test_detector_height_default_keeps_the_fill_factor():
+    s = xbsm.sensor(**BASE, pixel_pitch_y=10e-6, detector_width_x=6e-6)
+    assert float(s.detector_width_y) == pytest.approx(6e-6 / 8e-6 * 10e-6)
+    # pyBSM derives w_y = p_x / w_x * p_y; pybsm_compat reproduces it
+    c = compat.sensor(D=0.275, f=4.0, p_x=8e-6, p_y=10e-6, w_x=6e-6,
+                      opt_trans_wavelengths=np.array([0.5e-6, 0.66e-6]))
+    assert float(c.detector_width_y) == pytest.approx(8e-6 / 6e-6 * 10e-6)
+
+
+@pytest.mark.parametrize(
+    "kw, name, allowed",
+    [
+        ({"aperture_diameter": -0.1}, "aperture_diameter", "(0, inf] m"),
+        ({"wavelength_min": 0.2e-6}, "wavelength_min", "[3e-07, 1.4e-05) m"),
+        ({"wavelength_max": 15e-6}, "wavelength_max", "(3e-07, 1.4e-05] m"),
+        ({"max_well_fill": 1.2}, "max_well_fill", "(0, 1] 1"),
+        ({"obscuration_ratio": 1.0}, "obscuration_ratio", "[0, 1) 1"),
+        ({"quantum_efficiency": -0.1}, "quantum_efficiency", "[0, 1] 1"),
+    ],
+)
+def test_sensor_rejects_bad_input_naming_parameter_and_range(kw, name, allowed):
+    with pytest.raises(ValueError) as err:
+        xbsm.sensor(**{**BASE, **kw})
+    assert name in str(err.value)
+    assert allowed in str(err.value)
+
+
+def test_band_must_be_ordered():
+    with pytest.raises(ValueError, match="wavelength_min must be smaller"):
+        xbsm.sensor(**{**BASE, "wavelength_min": 0.7e-6})
+
+
+def test_kernel_must_sum_to_one_within_rounding():
+    xbsm.sensor(**BASE, filter_kernel=[[0.7, 0.2, 0.1]])  # float sum 0.9999999999999999
+    with pytest.raises(ValueError, match="filter_kernel must sum to 1"):
+        xbsm.sensor(**BASE, filter_kernel=[[0.5, 0.4]])
+
+
+@pytest.mark.parametrize(
+    "kw, name",
+    [
+        ({"altitude": 600e3}, "altitude"),
+        ({"altitude": 1.0}, "altitude"),
+        ({"ground_range": -1.0}, "ground_range"),
+        ({"ground_range": 301e3}, "ground_range"),
+        ({"visibility": 10.0}, "visibility"),
+    ],
+)
+def test_scenario_rejects_bad_input(kw, name):
+    with pytest.raises(ValueError, match=name):
+        xbsm.scenario(**{"altitude": 9000.0, "ground_range": 0.0, "visibility": 23.0, **kw})
+
+
+def test_compat_rejects_mismatched_spectral_arrays():
+    with pytest.raises(ValueError, match="qe must have one value per entry of qe_wavelengths"):
+        compat.sensor(D=0.2, f=2.0, p_x=1e-5, opt_trans_wavelengths=np.array([0.5e-6, 0.7e-6]),
+                      qe=np.array([0.5, 0.6, 0.7]), qe_wavelengths=np.array([0.5e-6, 0.7e-6]))
+
+
+def test_compat_rejects_unknown_ihaze_and_keywords():
+    with pytest.raises(ValueError, match="ihaze must be 1"):
+        compat.scenario(ihaze=3, altitude=9000.0, ground_range=0.0)
+    with pytest.raises(ValueError, match="unknown pyBSM Sensor keyword"):
+        compat.sensor(D=0.2, f=2.0, p_x=1e-5, opt_trans_wavelengths=[0.5e-6, 0.7e-6], bogus=1)
+
+
+def test_compat_maps_every_pybsm_keyword():
+    # every pyBSM 0.16.1 Sensor.__init__ keyword plus post-construction attributes
+    pybsm_sensor = {
+        "name", "D", "f", "p_x", "opt_trans_wavelengths", "eta", "p_y", "w_x", "w_y",
+        "int_time", "qe", "qe_wavelengths", "dark_current", "other_irradiance", "read_noise",
+        "max_n", "max_well_fill", "bit_depth", "n_tdi", "cold_shield_temperature",
+        "optics_temperature", "optics_emissivity", "cold_filter_transmission",
+        "cold_filter_temperature", "cold_filter_emissivity", "s_x", "s_y", "da_x", "da_y",
+        "pv", "pv_wavelength", "filter_kernel", "frame_stacks",
+        "optics_transmission", "other_noise", "L_x", "L_y",
+    }
+    assert pybsm_sensor == set(compat.SENSOR_NAMES)
+    pybsm_scenario = {
+        "name", "ihaze", "altitude", "ground_range", "aircraft_speed", "target_reflectance",
+        "target_temperature", "background_reflectance", "background_temperature",
+        "ha_wind_speed", "cn2_at_1m", "interp",
+    }
+    assert pybsm_scenario == set(compat.SCENARIO_NAMES)
+
+
+def test_inputs_are_not_modified():
+    qe = xr.DataArray([0.8, 0.8], dims="wavelength", coords={"wavelength": [0.5e-6, 0.66e-6]})
+    before = qe.copy(deep=True)
+    gr = xr.DataArray(np.linspace(0, 5e4, 3), dims="case")
+    gr_before = gr.copy(deep=True)
+    s = xbsm.sensor(**BASE, quantum_efficiency=qe)
+    sc = xbsm.scenario(altitude=9000.0, ground_range=gr, visibility=23.0)
+    xbsm.snr(s, sc)
+    xr.testing.assert_identical(qe, before)
+    xr.testing.assert_identical(gr, gr_before)
+
+
+def test_sweep_parameter_keeps_its_dimension():
+    d = xr.DataArray([0.1, 0.2, 0.3], dims="diameter")
+    s = xbsm.sensor(**{**BASE, "aperture_diameter": d})
+    assert s.aperture_diameter.dims == ("diameter",)
+
+
+def test_dask_inputs_are_checked_lazily(no_compute):
+    gr = xr.DataArray(dsa.from_array(np.array([0.0, 400e3]), chunks=1), dims="case")
+    sc = xbsm.scenario(altitude=9000.0, ground_range=gr, visibility=23.0)
+    assert sc.ground_range.chunks is not None
+
+
+def test_dask_inputs_raise_when_computed():
+    gr = xr.DataArray(dsa.from_array(np.array([0.0, 400e3]), chunks=1), dims="case")
+    sc = xbsm.scenario(altitude=9000.0, ground_range=gr, visibility=23.0)
+    with pytest.raises(ValueError, match="ground_range"):
+        sc.ground_range.compute()
