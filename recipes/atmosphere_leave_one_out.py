@@ -87,7 +87,8 @@ CASES = [
     ("ground_range", 5.0, 1000.0, 11000.0, "TRANS", 0.45),
     ("ground_range", 5.0, 1000.0, 11000.0, "TRANS", 0.6),
     ("ground_range", 5.0, 1000.0, 11000.0, "GRND_RFLT", 0.6),
-    ("ground_range", 23.0, 1000.0, 90000.0, "TRANS", 0.6),
+    ("ground_range", 23.0, 5000.0, 90000.0, "TRANS", 0.6),
+    ("ground_range", 23.0, 1000.0, 90000.0, "TRANS", 0.6),  # near the 1 km horizon
     ("altitude", 5.0, 2000.0, 20000.0, "TRANS", 0.6),
     ("altitude", 23.0, 5000.0, 60000.0, "TRANS", 0.6),
     ("altitude", 5.0, 500.0, 10000.0, "TRANS", 0.6),
