@@ -13,7 +13,7 @@ the sine, imaginary part against the cosine). For a symmetric PSF the OTF is
 real and may be negative (sinc lobes, defocus, drift); pass it as is. pyBSM
 0.16.1 passes :math:`|OTF|`, which folds the negative lobes up and biases RER
 high or low; ``docs/metrics.md`` quantifies this (a rect detector alone gives
-RER = 1 exactly with the OTF, 0.88 with its modulus). To reproduce pyBSM, pass
+RER = 1 exactly with the OTF, 0.867 with its modulus). To reproduce pyBSM, pass
 ``abs(otf)``.
 """
 
