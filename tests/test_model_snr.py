@@ -8,7 +8,7 @@ from pybsm_cases import datasets, load_cases
 
 import xbsm
 from xbsm.flags import has_flag
-from xbsm.radiometry import dark_current_from_density
+from xbsm.examples import olson_sensor as olson
 
 CASES, OUTPUTS = load_cases()
 
@@ -67,20 +67,6 @@ def test_snr_with_scenario_targets_matches_photon_detector_snr(index):
                          ("target_photoelectrons", "tgt_n"),
                          ("background_photoelectrons", "bkg_n")):
         assert relative_error(result[ours], OUTPUTS[f"scenario_{theirs}"][index]) <= 1e-9
-
-
-def olson(band):
-    """The paper's Table 2 camera (red or NIR band)."""
-    lo, hi, qe = {"red": (0.5e-6, 0.66e-6, 0.8), "nir": (0.55e-6, 0.85e-6, 0.71)}[band]
-    p = 8e-6
-    return xbsm.sensor(
-        aperture_diameter=0.275, focal_length=4.0, pixel_pitch_x=p, wavelength_min=lo,
-        wavelength_max=hi, obscuration_ratio=0.4, optics_transmission=0.5,
-        quantum_efficiency=qe, integration_time=0.03, read_noise=25.0, max_well=96000.0,
-        bit_depth=11.9, max_well_fill=0.6, jitter_x=0.25 * p / 4, jitter_y=0.25 * p / 4,
-        drift_rate_x=100e-6, drift_rate_y=100e-6,
-        dark_current=float(dark_current_from_density(1e-5, p, p)),
-    )
 
 
 @pytest.mark.parametrize("band, paper_contrast, tolerance", [("red", 668, 0.02), ("nir", 1283, 0.05)])

@@ -10,13 +10,14 @@ Public entry points::
 """
 
 from . import pybsm_compat
-from .atmosphere import open_atmosphere
+from .atmosphere import atmosphere_at, open_atmosphere
 from .methods import Method, method
 from .model import snr
 from .params import scenario, sensor
 
 __all__ = [
     "Method",
+    "atmosphere_at",
     "method",
     "open_atmosphere",
     "pybsm_compat",
