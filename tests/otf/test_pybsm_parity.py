@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import grid_da
+from otf_helpers import grid_da
 
 from xbsm.otf import aperture, defocus, detector, filters, motion, spectral, turbulence, wavefront
 

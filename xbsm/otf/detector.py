@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .spectral import _finish, _positive, _require
+from .spectral import _finish, _positive, _require, _sinc
 
 __all__ = ["detector", "aggregated_detector", "charge_transfer", "diffusion"]
 
@@ -36,9 +36,7 @@ def detector(fx, fy, detector_width_x, detector_width_y, focal_length):
     _positive("detector_width_x", detector_width_x)
     _positive("detector_width_y", detector_width_y)
     _positive("focal_length", focal_length)
-    out = np.sinc(detector_width_x / focal_length * fx) * np.sinc(
-        detector_width_y / focal_length * fy
-    )
+    out = _sinc(detector_width_x / focal_length * fx) * _sinc(detector_width_y / focal_length * fy)
     return _finish(out, detector)
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .spectral import _finish, _finite, _nonnegative, _positive, _require
+from .spectral import _finish, _finite, _nonnegative, _positive, _require, _sinc
 
 __all__ = ["jitter", "drift", "tdi"]
 
@@ -63,7 +63,7 @@ def drift(fx, fy, drift_x, drift_y):
     """
     _finite("drift_x", drift_x)
     _finite("drift_y", drift_y)
-    out = np.sinc(drift_x * fx) * np.sinc(drift_y * fy)
+    out = _sinc(drift_x * fx) * _sinc(drift_y * fy)
     return _finish(out, drift)
 
 
@@ -127,5 +127,5 @@ def tdi(frequency, detector_width, focal_length, stages, rate_ratio, phases=1):
     ratio = xr.where(
         near_zero, np.cos(np.pi * m * y) / np.cos(np.pi * y), np.sin(np.pi * m * y) / (m * safe)
     )
-    out = np.sinc(x) * np.exp(-1j * np.pi * (m - 1.0) * y) * ratio
+    out = _sinc(x) * np.exp(-1j * np.pi * (m - 1.0) * y) * ratio
     return _finish(out, tdi)

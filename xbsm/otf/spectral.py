@@ -53,6 +53,17 @@ def _finite(name: str, value) -> None:
     _require(name, value, np.isfinite, "finite")
 
 
+def _sinc(x):
+    """Normalised sinc, sin(pi x)/(pi x), keeping DataArrays (and dask) intact.
+
+    ``np.sinc`` is not a ufunc, so on a DataArray it would return a bare (and,
+    for dask, computed) ndarray.
+    """
+    if isinstance(x, xr.DataArray):
+        return xr.apply_ufunc(np.sinc, x, dask="parallelized", output_dtypes=[float])
+    return np.sinc(x)
+
+
 def _long_name(func) -> str:
     return func.__doc__.strip().splitlines()[0].rstrip(".")
 
