@@ -73,7 +73,7 @@ def nadir_angle(slant_range, sensor_altitude, target_altitude=0.0):
     a = EARTH_RADIUS + sensor_altitude
     c = EARTH_RADIUS + target_altitude
     cosine = -(c**2.0 - a**2.0 - slant_range**2.0) / (2.0 * a * slant_range)
-    out = np.arccos(np.clip(cosine, -1.0, 1.0))
+    out = np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0))
     return _attrs(out, "rad", "nadir angle")
 
 
@@ -198,5 +198,5 @@ def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0):
     a = EARTH_RADIUS + sensor_altitude
     c = EARTH_RADIUS + target_altitude
     cosine = (a**2.0 - c**2.0 - slant_range**2.0) / (2.0 * c * slant_range)
-    out = np.arcsin(np.clip(cosine, -1.0, 1.0))
+    out = np.arcsin(np.minimum(np.maximum(cosine, -1.0), 1.0))
     return _attrs(out, "rad", "elevation angle at the target")

@@ -30,12 +30,23 @@ class Method:
     edge is dropped because 1e-6 * 2.91 > 2.91e-6 in floating point, and 0.503 um snaps
     to 0.51 um) or "interpolated" (the band is exactly [min, max]: the atmosphere is
     interpolated linearly in wavelength at edges that fall between database samples)."""
-    frequency_samples: int
-    """Points of the square frequency grid over +/- D/lambda_min (pyBSM: 101); the edge
-    response then uses ``frequency_samples // 2`` samples from 0."""
     edge_rule: str
-    """Edge-response quadrature: "pybsm" (trapezoid on the grid, 1e-6 offset),
-    "accurate" (composite Gauss-Legendre resolving every oscillation) or "fast"."""
+    """Edge-response quadrature over frequency: "uniform_trapezoid" (pyBSM: trapezoid on
+    the slice of its square grid, with a 1e-6 cycles/rad offset in 1/f and the sine) or
+    "gauss_legendre" (composite Gauss-Legendre resolving every oscillation of the
+    integrand; see xbsm.quadrature)."""
+    frequency_samples: int
+    """uniform_trapezoid: points N of pyBSM's grid linspace(-1, 1, N) * D / lambda_min
+    (pyBSM: 101, which leaves 50 samples from 0 to the cutoff)."""
+    nodes_per_panel: int
+    """gauss_legendre: nodes per panel."""
+    panels_per_oscillation: float
+    """gauss_legendre: panels per period of sin(2 pi f ifov x) at x = 3 px."""
+    min_panels: int
+    """gauss_legendre: fewest panels over [0, D / lambda_min]."""
+    otf_wavelengths: int
+    """Most wavelengths used for the polychromatic OTFs (aperture, turbulence, wavefront);
+    0 = every database wavelength of the band. Fewer bins the spectral weights."""
     edge_otf: str
     """OTF part used for edge response: "abs" (pyBSM's |OTF|) or "real"."""
     giqe4_noise_coefficient: float
@@ -48,7 +59,14 @@ class Method:
     turbulence_path_rule: str
     """Path quadrature for r0: "trapezoid" (pyBSM) or "gauss-legendre"."""
     grd_rule: str
-    """Ground resolved distance: "pybsm" (np.interp on the reversed MTF) or "first-crossing"."""
+    """Ground resolved distance: "pybsm" (np.interp on the reversed MTF) or "first_crossing"."""
+    elevation: str
+    """GIQE elevation angle: "look-down" (pyBSM: pi/2 minus the nadir angle at the sensor)
+    or "target" (elevation of the sensor above the target's horizon, which is what
+    projects the GSD onto the ground; smaller by the central angle)."""
+    undersampling_threshold: float
+    """Flag ``undersampled_grid`` when a uniform edge rule has fewer samples than this per
+    period of sin(2 pi f ifov x) at x = 3 px."""
 
     def replace(self, **knobs) -> Method:
         """A copy with some knobs changed."""
@@ -69,31 +87,45 @@ PRESETS: dict[str, Method] = {
         constants=PYBSM_CODATA_2014,
         atmosphere_interpolation="linear",
         band_edges="exact",
+        edge_rule="uniform_trapezoid",
         frequency_samples=101,
-        edge_rule="pybsm",
+        nodes_per_panel=10,
+        panels_per_oscillation=1.0,
+        min_panels=8,
+        otf_wavelengths=0,
         edge_otf="abs",
         giqe4_noise_coefficient=0.334,
         filter_otf="pybsm",
         turbulence_path_samples=10000,
         turbulence_path_rule="trapezoid",
         grd_rule="pybsm",
+        elevation="look-down",
+        undersampling_threshold=4.0,
     ),
     "accurate": Method(
         name="accurate",
         constants=CODATA,
         atmosphere_interpolation="log-linear",
         band_edges="interpolated",
+        edge_rule="gauss_legendre",
         frequency_samples=101,
-        edge_rule="accurate",
+        nodes_per_panel=10,
+        panels_per_oscillation=1.0,
+        min_panels=8,
+        otf_wavelengths=0,
         edge_otf="real",
         giqe4_noise_coefficient=0.344,
         filter_otf="dtft",
         turbulence_path_samples=64,
         turbulence_path_rule="gauss-legendre",
-        grd_rule="first-crossing",
+        grd_rule="first_crossing",
+        elevation="target",
+        undersampling_threshold=4.0,
     ),
 }
-PRESETS["fast"] = PRESETS["accurate"].replace(name="fast", edge_rule="fast")
+PRESETS["fast"] = PRESETS["accurate"].replace(
+    name="fast", nodes_per_panel=6, min_panels=4, otf_wavelengths=8, turbulence_path_samples=16
+)
 
 
 def method(name: str | Method = "accurate", **knobs) -> Method:

@@ -72,12 +72,16 @@ def _as_position(position):
 def _check_slice(otf_slice, weights):
     if not isinstance(otf_slice, xr.DataArray) or "frequency" not in otf_slice.dims:
         raise ValueError("otf_slice must be an xr.DataArray with a 'frequency' dimension")
-    if "frequency" not in otf_slice.coords:
-        raise ValueError("otf_slice needs a 'frequency' coordinate [cycles/rad]")
-    if weights is not None:
+    if weights is None:
+        if "frequency" not in otf_slice.coords:
+            raise ValueError("otf_slice needs a 'frequency' coordinate [cycles/rad]")
+        return
+    if otf_slice.sizes["frequency"] != weights.sizes["frequency"]:
+        raise ValueError("otf_slice and weights must have the same number of frequency samples")
+    if "frequency" in otf_slice.coords and "frequency" in weights.coords:
         a = np.asarray(otf_slice["frequency"].values)
         b = np.asarray(weights["frequency"].values)
-        if a.shape != b.shape or not np.array_equal(a, b):
+        if not np.array_equal(a, b):
             raise ValueError(
                 "otf_slice must be sampled at the quadrature nodes: its 'frequency' "
                 "coordinate differs from that of weights"
@@ -85,11 +89,16 @@ def _check_slice(otf_slice, weights):
 
 
 def _edge_kernels(weights, ifov, position, need_cosine):
-    """Sine (and cosine) tables: depend on (frequency, position, ifov) only."""
-    f = weights["sine_frequency"] if "sine_frequency" in weights.coords else weights["frequency"]
-    f = f.reset_coords(drop=True) if isinstance(f, xr.DataArray) else f
-    w = weights.reset_coords(drop=True)
-    f = xr.DataArray(np.asarray(f), dims="frequency", coords={"frequency": w["frequency"]})
+    """Sine (and cosine) tables: depend on (frequency, position, ifov) only.
+
+    The abscissa is the ``sine_frequency`` coordinate of ``weights`` (else its
+    ``frequency`` coordinate); it may carry sensor dimensions besides
+    ``frequency`` when every sensor of a sweep has nodes of its own.
+    """
+    f = weights.coords["sine_frequency"] if "sine_frequency" in weights.coords else weights[
+        "frequency"]
+    f = f.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
+    w = weights.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
     phase = 2.0 * np.pi * f * ifov * position
     sine = w * np.sin(phase) / f
     cosine = w * np.cos(phase) / f if need_cosine else None
@@ -139,7 +148,7 @@ def edge_response(otf_slice, ifov, position, weights):
     pos = _as_position(position)
     complex_input = otf_slice.dtype.kind == "c"
     sine, cosine = _edge_kernels(weights, ifov, pos, complex_input)
-    h = otf_slice.reset_coords(drop=True)
+    h = otf_slice.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
     if complex_input:
         integral = xr.dot(np.real(h), sine, dim="frequency") + xr.dot(
             np.imag(h), cosine, dim="frequency"

@@ -1,0 +1,291 @@
+"""The system OTF of a sensor in a scenario: every component and their product.
+
+The components follow pyBSM's ``common_OTFs`` (paper Table 1 and Eq. 3):
+aperture x turbulence x detector x jitter x drift x wavefront x filter. Each
+is computed on the dimensions it depends on and nothing more: the aperture,
+detector, jitter, wavefront and filter OTFs are sensor quantities; only the
+turbulence (path r0, integration time, platform speed) and the drift
+(integration time) and the spectral weights (atmosphere) bring in scenario
+dimensions. Radially symmetric components (aperture, turbulence) are
+evaluated once on the radial frequency and shared by the x and y slices.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+
+from ..methods import Method
+from . import aperture, detector, filters, motion, turbulence, wavefront
+
+ORIENTATION = xr.DataArray(["x", "y"], dims="orientation", name="orientation")
+"""The two slice directions the GIQE uses: along x (fx = f) and along y (fy = f)."""
+_UNIT_X = xr.DataArray([1.0, 0.0], dims="orientation", coords={"orientation": ORIENTATION})
+_UNIT_Y = xr.DataArray([0.0, 1.0], dims="orientation", coords={"orientation": ORIENTATION})
+
+COMPONENTS = ("aperture", "turbulence", "detector", "jitter", "drift", "wavefront", "filter")
+
+
+def _named(da, long_name):
+    return da.assign_attrs(units="1", long_name=long_name)
+
+
+def cutoff_wavelength(sensor: xr.Dataset, wavelength: xr.DataArray, qe, transmission):
+    """Shortest band wavelength that contributes signal (where QE x transmission > 0).
+
+    Parameters
+    ----------
+    sensor : xr.Dataset
+        Sensor parameters (unused except for their dims).
+    wavelength : xr.DataArray
+        Band wavelengths. [m]
+    qe, transmission : xr.DataArray or float
+        Quantum efficiency and optics transmission on ``wavelength``. [1]
+
+    Returns
+    -------
+    xr.DataArray
+        The wavelength setting the optics cutoff D / lambda. [m]
+    """
+    contributes = (xr.DataArray(qe) * xr.DataArray(transmission)) > 0
+    contributes = contributes.broadcast_like(wavelength)
+    out = wavelength.where(contributes).min("wavelength")
+    return out.assign_attrs(units="m", long_name="shortest contributing wavelength")
+
+
+def _sensor_grid(*arrays):
+    """Broadcast sensor quantities to numpy, keeping their dims and coords."""
+    b = xr.broadcast(*[xr.DataArray(a) for a in arrays])
+    return b, b[0].dims, {d: b[0][d] for d in b[0].dims if d in b[0].coords}
+
+
+def edge_nodes(cutoff, ifov_x, ifov_y, method: Method):
+    """Frequency nodes and quadrature weights for the edge response of every sensor.
+
+    Parameters
+    ----------
+    cutoff : float or xr.DataArray
+        Optics cutoff D / lambda_min, possibly over sensor dims. [cycles/rad]
+    ifov_x, ifov_y : float or xr.DataArray
+        Detector pitch over focal length. [rad]
+    method : Method
+        Knobs ``edge_rule``, ``frequency_samples``, ``nodes_per_panel``,
+        ``panels_per_oscillation``, ``min_panels``.
+
+    Returns
+    -------
+    nodes, weights : xr.DataArray
+        On dims (``frequency``, sensor dims...); ``weights`` carries the
+        ``sine_frequency`` coordinate of :mod:`xbsm.quadrature`. Sensors that
+        need fewer nodes than the largest are padded with zero weights.
+        [cycles/rad]
+    """
+    from .. import quadrature
+
+    (c, ix, iy), dims, coords = _sensor_grid(cutoff, ifov_x, ifov_y)
+    knobs = dict(
+        rule=method.edge_rule, grid_size=method.frequency_samples,
+        nodes_per_panel=method.nodes_per_panel,
+        panels_per_oscillation=method.panels_per_oscillation, min_panels=method.min_panels,
+    )
+    rule = quadrature.EdgeQuadrature(name=method.name, **knobs)
+    per_sensor = {}
+    for index in np.ndindex(c.shape):
+        key = (float(c.values[index]), float(max(ix.values[index], iy.values[index])))
+        if key not in per_sensor:
+            nodes, weights = quadrature.edge_quadrature(rule, cutoff=key[0], ifov=key[1])
+            per_sensor[key] = (nodes.values, weights.values, weights["sine_frequency"].values)
+    size = max(v[0].size for v in per_sensor.values())
+    shape = (size,) + c.shape
+    nodes = np.empty(shape)
+    weights = np.zeros(shape)
+    sine = np.empty(shape)
+    for index in np.ndindex(c.shape):
+        key = (float(c.values[index]), float(max(ix.values[index], iy.values[index])))
+        n, w, s = per_sensor[key]
+        pad = (slice(None),) + index
+        nodes[pad] = key[0]
+        sine[pad] = key[0]
+        nodes[(slice(0, n.size),) + index] = n
+        weights[(slice(0, n.size),) + index] = w
+        sine[(slice(0, n.size),) + index] = s
+    all_dims = ("frequency",) + tuple(dims)
+    attrs = {"units": "cycles/rad"}
+    nodes_da = xr.DataArray(nodes, dims=all_dims, coords=coords,
+                            attrs={**attrs, "long_name": "edge-response frequency nodes"})
+    weights_da = xr.DataArray(weights, dims=all_dims, coords=coords,
+                              attrs={**attrs, "long_name": "edge-response quadrature weights"})
+    weights_da = weights_da.assign_coords(
+        sine_frequency=(all_dims, sine, {**attrs, "long_name": "abscissa of 1/f and the sine"})
+    )
+    return nodes_da, weights_da
+
+
+def samples_per_oscillation(nodes, cutoff, ifov_x, ifov_y):
+    """Frequency samples per period of the edge-response integrand at 3 px.
+
+    Parameters
+    ----------
+    nodes : xr.DataArray
+        Frequency nodes on ``frequency``. [cycles/rad]
+    cutoff : float or xr.DataArray
+        [cycles/rad]
+    ifov_x, ifov_y : float or xr.DataArray
+        [rad]
+
+    Returns
+    -------
+    xr.DataArray
+        [1]
+    """
+    oscillations = cutoff * np.maximum(ifov_x, ifov_y) * 3.0
+    return (nodes.sizes["frequency"] / oscillations).assign_attrs(units="1")
+
+
+def spectral_bins(wavelength: xr.DataArray, weights: xr.DataArray, count: int):
+    """Group the band into at most ``count`` contiguous bins for the polychromatic OTFs.
+
+    Parameters
+    ----------
+    wavelength : xr.DataArray
+        Band wavelengths. [m]
+    weights : xr.DataArray
+        Spectral weights over ``wavelength``. [any]
+    count : int
+        Largest number of bins; 0 keeps every wavelength.
+
+    Returns
+    -------
+    wavelength, weights : xr.DataArray
+        Bin-centre wavelengths (the mean of each bin's wavelengths) and summed weights.
+    """
+    n = wavelength.sizes["wavelength"]
+    if count <= 0 or count >= n:
+        return wavelength, weights
+    labels = np.minimum((np.arange(n) * count) // n, count - 1)
+    group = xr.DataArray(labels, dims="wavelength", name="bin")
+    centres = wavelength.groupby(group).mean().rename(bin="wavelength")
+    summed = weights.groupby(group).sum().rename(bin="wavelength")
+    return centres.values, summed.assign_coords(wavelength=centres.values)
+
+
+def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.DataArray, *,
+               spectral_weights: xr.DataArray, integration_time, slant_range,
+               method: Method, fy: xr.DataArray | None = None) -> xr.Dataset:
+    """Every OTF component of the system and their product (paper Table 1, Eq. 3, Figure 5).
+
+    Parameters
+    ----------
+    sensor, scenario : xr.Dataset
+        From :func:`xbsm.sensor` and :func:`xbsm.scenario`.
+    frequency : xr.DataArray
+        Either radial slice frequencies (dim ``frequency``; the result gains an
+        ``orientation`` dim for the x and y slices) or, with ``fy``, the x
+        frequencies of a 2-D grid. [cycles/rad]
+    spectral_weights : xr.DataArray
+        Spectral photoelectron rate over ``wavelength`` (from :func:`xbsm.snr`). [any]
+    integration_time : float or xr.DataArray
+        Integration time per TDI stage after the well-fill limit. [s]
+    slant_range : float or xr.DataArray
+        [m]
+    method : Method
+        Knobs ``filter_otf``, ``otf_wavelengths``, ``turbulence_path_samples``,
+        ``turbulence_path_rule``.
+    fy : xr.DataArray, optional
+        The y frequencies of a 2-D grid. [cycles/rad]
+
+    Returns
+    -------
+    xr.Dataset
+        ``aperture``, ``turbulence``, ``detector``, ``jitter``, ``drift``,
+        ``wavefront``, ``filter``, their product ``system``, ``system_unfiltered``
+        (the product without the post-processing filter, which GIQE 5 uses) and
+        ``coherence_diameter`` (the band-weighted r0). [1]
+    """
+    s, sc = sensor, scenario
+    if fy is None:
+        fx, fy_ = frequency * _UNIT_X, frequency * _UNIT_Y
+        radial = frequency
+    else:
+        fx, fy_ = frequency, fy
+        radial = np.hypot(frequency, fy)
+    zero = xr.zeros_like(radial)
+    wavelength = spectral_weights["wavelength"]
+    wl, w = spectral_bins(wavelength, spectral_weights, method.otf_wavelengths)
+    wl = xr.DataArray(np.asarray(wl), dims="wavelength", coords={"wavelength": np.asarray(wl)})
+    w = w / w.sum("wavelength")
+    diameter = s["aperture_diameter"]
+
+    # sensor quantities: evaluated once per sensor, then weighted per scenario
+    mono_aperture = aperture.circular_aperture(radial, zero, wl, diameter, s["obscuration_ratio"])
+    ap = xr.dot(mono_aperture, w, dim="wavelength")
+    mono_wavefront = wavefront.random_phase_wavefront(
+        fx, fy_, wl, s["wavefront_variance"], s["wavefront_correlation_length_x"],
+        s["wavefront_correlation_length_y"], s["wavefront_wavelength"],
+    )
+    wav = xr.dot(mono_wavefront, w, dim="wavelength")
+    det = detector.detector(fx, fy_, s["detector_width_x"], s["detector_width_y"],
+                            s["focal_length"])
+    jit = motion.jitter(fx, fy_, s["jitter_x"], s["jitter_y"])
+    exposure = integration_time * s["tdi_stages"]
+    dri = motion.drift(fx, fy_, s["drift_rate_x"] * exposure, s["drift_rate_y"] * exposure)
+    fil = _filter(s, fx, fy_, method)
+
+    # turbulence: path r0 at 1 um, scaled per wavelength, blended by wind, weighted
+    cn2 = sc["cn2_at_1m"]
+    turbulent = cn2 > 0
+    r0_ref = turbulence.slant_path_coherence_diameter(
+        slant_range, sc["altitude"], 0.0, sc["high_altitude_wind_speed"],
+        xr.where(turbulent, cn2, 1.0e-14), path_samples=method.turbulence_path_samples,
+        rule=method.turbulence_path_rule,
+    )
+    turb = 0.0
+    for i in range(wl.sizes["wavelength"]):
+        lam = float(wl[i])
+        r0 = turbulence.scale_coherence_diameter(r0_ref, lam)
+        mono = turbulence.wind_blended_turbulence(
+            radial, zero, lam, diameter, r0, exposure, sc["platform_speed"]
+        )
+        turb = turb + w.isel(wavelength=i, drop=True) * mono
+    turb = xr.where(turbulent, turb, 1.0)
+    r0_band = xr.where(
+        turbulent, turbulence.band_coherence_diameter(r0_ref, wl, w), np.inf
+    ).assign_attrs(units="m", long_name="band-weighted coherence diameter r0")
+
+    parts = {
+        "aperture": _named(ap, "aperture OTF"),
+        "turbulence": _named(turb, "turbulence OTF"),
+        "detector": _named(det, "detector OTF"),
+        "jitter": _named(jit, "jitter OTF"),
+        "drift": _named(dri, "drift OTF"),
+        "wavefront": _named(wav, "wavefront OTF"),
+    }
+    unfiltered = math.prod(parts.values())
+    parts["filter"] = _named(fil, "post-processing filter OTF")
+    out = xr.Dataset(parts)
+    out["system_unfiltered"] = _named(unfiltered, "system OTF without the filter")
+    out["system"] = _named(unfiltered * fil, "system OTF")
+    out["coherence_diameter"] = r0_band
+    return out
+
+
+def _filter(sensor, fx, fy, method: Method):
+    """The post-processing filter OTF, or exactly 1 when there is no filter."""
+    kernel = sensor["filter_kernel"]
+    identity = kernel.shape == (1, 1) and float(kernel[0, 0]) == 1.0
+    # pyBSM 0.16.1 skips kernels with a single row (common_OTFs: shape[0] > 1)
+    pybsm_skips = method.filter_otf == "pybsm" and kernel.sizes["kernel_y"] == 1
+    if identity or pybsm_skips:
+        return xr.ones_like(fx * fy)
+    ifov_x = sensor["pixel_pitch_x"] / sensor["focal_length"]
+    ifov_y = sensor["pixel_pitch_y"] / sensor["focal_length"]
+    if method.filter_otf == "pybsm":
+        if ifov_x.ndim:
+            raise ValueError(
+                "method filter_otf='pybsm' cannot sweep pixel_pitch_x or focal_length "
+                "with a filter kernel; use filter_otf='dtft'"
+            )
+        return filters.sharpening_filter(fx, fy, kernel.values, float(ifov_x), method="pybsm")
+    return filters.sharpening_filter(fx, fy, kernel.values, ifov_x, ifov_y, method="dtft")
