@@ -607,7 +607,10 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION):
     """
     rer, gsd, eho, snr, noise_gain = map(_da, (rer, gsd, eho, snr, noise_gain))
     with np.errstate(divide="ignore", invalid="ignore"):
-        niirs = 11.81 + 3.32 * np.log10(rer / (gsd / INCH)) - 1.48 * eho - noise_gain / snr
+        # log10(RER) - log10(GSD) rather than log10(RER / GSD): no underflow for tiny RER
+        niirs = (
+            11.81 + 3.32 * (np.log10(rer) - np.log10(gsd / INCH)) - 1.48 * eho - noise_gain / snr
+        )
     niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0))
     niirs = _attrs(niirs, "1", "NIIRS (GIQE 3)", references="IBSM Eq. 3-56")
     fl = giqe_flags(snr=snr, rer=rer, gsd=gsd, niirs=niirs, calibration=calibration)

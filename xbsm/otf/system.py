@@ -241,14 +241,12 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.DataArray
         xr.where(turbulent, cn2, 1.0e-14), path_samples=method.turbulence_path_samples,
         rule=method.turbulence_path_rule,
     )
-    turb = 0.0
-    for i in range(wl.sizes["wavelength"]):
-        lam = float(wl[i])
-        r0 = turbulence.scale_coherence_diameter(r0_ref, lam)
-        mono = turbulence.wind_blended_turbulence(
-            radial, zero, lam, diameter, r0, exposure, sc["platform_speed"]
-        )
-        turb = turb + w.isel(wavelength=i, drop=True) * mono
+    turb = xr.apply_ufunc(
+        _polychromatic_turbulence_kernel, radial, r0_ref, exposure, sc["platform_speed"],
+        diameter, wl, w,
+        input_core_dims=[[], [], [], [], [], ["wavelength"], ["wavelength"]],
+        dask="parallelized", output_dtypes=[float],
+    )
     turb = xr.where(turbulent, turb, 1.0)
     r0_band = xr.where(
         turbulent, turbulence.band_coherence_diameter(r0_ref, wl, w), np.inf
@@ -269,6 +267,23 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.DataArray
     out["system"] = _named(unfiltered * fil, "system OTF")
     out["coherence_diameter"] = r0_band
     return out
+
+
+def _polychromatic_turbulence_kernel(radial, r0_ref, exposure, speed, diameter, wl, w):
+    """numpy kernel: weighted sum over the last (wavelength) axis, one wavelength at a time.
+
+    Accumulating wavelength by wavelength keeps memory at one slice of the
+    (frequency x scenario) block instead of materialising the wavelength axis.
+    """
+    total = np.zeros(np.broadcast_shapes(np.shape(radial), np.shape(r0_ref), np.shape(exposure),
+                                         np.shape(speed), np.shape(diameter), np.shape(w)[:-1]))
+    for i in range(np.shape(wl)[-1]):
+        lam = wl[..., i]
+        r0 = turbulence.scale_coherence_diameter(r0_ref, lam)
+        total += w[..., i] * turbulence.wind_blended_turbulence(
+            radial, 0.0, lam, diameter, r0, exposure, speed
+        )
+    return total
 
 
 def _filter(sensor, fx, fy, method: Method):
