@@ -611,7 +611,7 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION):
         niirs = (
             11.81 + 3.32 * (np.log10(rer) - np.log10(gsd / INCH)) - 1.48 * eho - noise_gain / snr
         )
-    niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0))
+    niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & np.isfinite(niirs))
     niirs = _attrs(niirs, "1", "NIIRS (GIQE 3)", references="IBSM Eq. 3-56")
     fl = giqe_flags(snr=snr, rer=rer, gsd=gsd, niirs=niirs, calibration=calibration)
     return xr.Dataset({"niirs": niirs, "flags": fl})
@@ -687,7 +687,7 @@ def giqe4(
             - 0.656 * eho
             - noise_coefficient * noise_gain / snr
         )
-    niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & (sin_el > 0))
+    niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & (sin_el > 0) & np.isfinite(niirs))
     niirs = _attrs(niirs, "1", "NIIRS (GIQE 4)", references="Leachtenauer et al. 1997")
     gsd_gp = _attrs(gsd_gp, "m", "ground-plane geometric-mean GSD")
     fl = giqe_flags(
@@ -771,7 +771,7 @@ def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION):
             - 2.0 * log_rer**4.0
             - 1.8 / snr
         )
-    niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & (sin_el > 0))
+    niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & (sin_el > 0) & np.isfinite(niirs))
     niirs = _attrs(niirs, "1", "NIIRS (GIQE 5)", references="NGA GIQE 5, 2015")
     gsd_w = _attrs(gsd_w, "m", "elevation-weighted GSD")
     fl = giqe_flags(
