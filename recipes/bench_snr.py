@@ -110,7 +110,7 @@ def main():
     sensor, scenario = xbsm_inputs()
     ours = xbsm.snr(sensor, scenario, method="pybsm")["snr_frame"]
     worst = 0.0
-    for case, value in zip(cases, pybsm["values"]):
+    for case, value in zip(cases, pybsm["values"], strict=False):
         sc = case["scenario"]
         mine = float(ours.sel(focal_length=case["sensor"]["f"], altitude=sc["altitude"],
                               ground_range=sc["ground_range"],
@@ -148,7 +148,7 @@ def plot(record):
     ax.set_yscale("log")
     ax.set_ylabel("time per scenario [us] (median)")
     ax.set_title(f"contrast SNR, {record['scenarios']} scenarios (Olson NIR camera)")
-    for bar, value in zip(bars, values):
+    for bar, value in zip(bars, values, strict=False):
         ax.annotate(f"{value:.3g} us", (bar.get_x() + bar.get_width() / 2, value),
                     ha="center", va="bottom")
     fig.tight_layout()

@@ -63,7 +63,8 @@ def test_gsd_and_ifov():
     assert ifov == pytest.approx(2e-6)
     gsd = geometry.ground_sample_distance(ifov, 21944.568747898647)
     # pybsm_test_cases.md A5: GIQE-5 gsd_w = gsd / sin(elevation)^(1/4) = 0.05479621447912214
-    assert gsd / np.sin(0.42415759925816854) ** 0.25 == pytest.approx(0.05479621447912214, rel=1e-12)
+    gsd_w = gsd / np.sin(0.42415759925816854) ** 0.25
+    assert gsd_w == pytest.approx(0.05479621447912214, rel=1e-12)
 
 
 def test_target_elevation_zero_at_horizon_and_vertical_at_nadir():

@@ -40,14 +40,7 @@ def _other_value(value):
         PRESETS["pybsm"].constants)
 
 
-NAME_COLLISION = pytest.mark.xfail(
-    strict=True, raises=TypeError,
-    reason="xbsm.method(name, **knobs): the preset argument is called 'name' like the knob, "
-           "so method('pybsm', name=...) is a TypeError; Method.replace(name=...) works")
-
-
-@pytest.mark.parametrize("knob", [pytest.param(k, marks=NAME_COLLISION) if k == "name" else k
-                                  for k in Method.knobs()])
+@pytest.mark.parametrize("knob", Method.knobs())
 def test_each_knob_overrides_alone(knob):
     base = xbsm.method("pybsm")
     value = _other_value(getattr(base, knob))

@@ -7,8 +7,8 @@ import xarray as xr
 from pybsm_cases import datasets, load_cases
 
 import xbsm
-from xbsm.flags import has_flag
 from xbsm.examples import olson_sensor as olson
+from xbsm.flags import has_flag
 
 CASES, OUTPUTS = load_cases()
 
@@ -69,7 +69,9 @@ def test_snr_with_scenario_targets_matches_photon_detector_snr(index):
         assert relative_error(result[ours], OUTPUTS[f"scenario_{theirs}"][index]) <= 1e-9
 
 
-@pytest.mark.parametrize("band, paper_contrast, tolerance", [("red", 668, 0.02), ("nir", 1283, 0.05)])
+@pytest.mark.parametrize(
+    "band, paper_contrast, tolerance", [("red", 668, 0.02), ("nir", 1283, 0.05)]
+)
 def test_olson_figure4_numbers(band, paper_contrast, tolerance):
     # Paper Figure 4 (9 km altitude, 20 km ground range, 5 km visibility): 57,600 total
     # photoelectrons (60% of the 96,000 e- well), contrast 668 (red) and 1283 (NIR).

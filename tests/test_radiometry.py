@@ -58,7 +58,8 @@ def test_cold_shield_plus_aperture_cone_is_a_hemisphere():
     wl = xr.DataArray(4e-6)
     shield = radiometry.cold_shield_self_emission(wl, 300.0, 0.1, 0.2)
     cone = radiometry.focal_plane_irradiance(radiometry.blackbody_radiance(wl, 300.0), 0.1, 0.2)
-    assert float(shield + cone) == pytest.approx(np.pi * float(radiometry.blackbody_radiance(wl, 300.0)))
+    hemisphere = np.pi * float(radiometry.blackbody_radiance(wl, 300.0))
+    assert float(shield + cone) == pytest.approx(hemisphere)
 
 
 def test_well_fill_scale():

@@ -9,20 +9,30 @@ Public entry points::
     n = xbsm.niirs(s, sc)
 """
 
-from . import pybsm_compat
+from . import examples, flags, geometry, metrics, noise, otf, plot, pybsm_compat, radiometry
 from .atmosphere import atmosphere_at, open_atmosphere
 from .methods import Method, method
-from .model import snr
+from .model import niirs, snr, system_otf
 from .params import scenario, sensor
 
 __all__ = [
     "Method",
+    "examples",
+    "flags",
+    "geometry",
+    "metrics",
+    "noise",
+    "otf",
+    "plot",
+    "radiometry",
     "atmosphere_at",
     "method",
     "open_atmosphere",
     "pybsm_compat",
     "scenario",
     "sensor",
+    "niirs",
     "snr",
+    "system_otf",
 ]
 __version__ = "0.1.0"

@@ -19,7 +19,7 @@ def _attrs(out, units, long_name):
 
 
 def slant_range(ground_range, sensor_altitude, target_altitude=0.0):
-    """Slant range between target and sensor over a spherical Earth.
+    r"""Slant range between target and sensor over a spherical Earth.
 
     Parameters
     ----------
@@ -37,9 +37,9 @@ def slant_range(ground_range, sensor_altitude, target_altitude=0.0):
 
     Notes
     -----
-    Law of cosines with the central angle :math:`\\theta = g / R_e`:
+    Law of cosines with the central angle :math:`\theta = g / R_e`:
 
-    .. math:: R = \\sqrt{a^2 + c^2 - 2ac\\cos\\theta},\\quad a = R_e + h_s,\\ c = R_e + h_t
+    .. math:: R = \sqrt{a^2 + c^2 - 2ac\cos\theta},\quad a = R_e + h_s,\ c = R_e + h_t
     """
     a = EARTH_RADIUS + sensor_altitude
     c = EARTH_RADIUS + target_altitude
@@ -78,9 +78,9 @@ def nadir_angle(slant_range, sensor_altitude, target_altitude=0.0):
 
 
 def elevation_angle(slant_range, sensor_altitude, target_altitude=0.0):
-    """Look-down angle of the line of sight below the sensor's horizontal.
+    r"""Look-down angle of the line of sight below the sensor's horizontal.
 
-    :math:`\\pi/2` minus the nadir angle: the GIQE "elevation angle" in pyBSM's
+    :math:`\pi/2` minus the nadir angle: the GIQE "elevation angle" in pyBSM's
     convention. Measured at the sensor, it equals the sensor's elevation seen
     from the target only over a flat Earth (at the horizon it is the central
     angle, not 0).
@@ -104,7 +104,7 @@ def elevation_angle(slant_range, sensor_altitude, target_altitude=0.0):
 
 
 def altitude_along_path(distance_from_target, slant_range, sensor_altitude, target_altitude=0.0):
-    """Height above the spherical Earth at a point on the line of sight.
+    r"""Height above the spherical Earth at a point on the line of sight.
 
     Parameters
     ----------
@@ -125,9 +125,9 @@ def altitude_along_path(distance_from_target, slant_range, sensor_altitude, targ
 
     Notes
     -----
-    With :math:`b` the distance from the sensor and :math:`\\phi` the nadir
+    With :math:`b` the distance from the sensor and :math:`\phi` the nadir
     angle, the distance of the point from the Earth centre is
-    :math:`\\sqrt{a^2 + b^2 - 2ab\\cos\\phi}`.
+    :math:`\sqrt{a^2 + b^2 - 2ab\cos\phi}`.
     """
     a = EARTH_RADIUS + sensor_altitude
     phi = nadir_angle(slant_range, sensor_altitude, target_altitude)

@@ -58,8 +58,6 @@ class Method:
     """Samples along the slant path for the r0 integral."""
     turbulence_path_rule: str
     """Path quadrature for r0: "trapezoid" (pyBSM) or "gauss-legendre"."""
-    grd_rule: str
-    """Ground resolved distance: "pybsm" (np.interp on the reversed MTF) or "first_crossing"."""
     elevation: str
     """GIQE elevation angle: "look-down" (pyBSM: pi/2 minus the nadir angle at the sensor)
     or "target" (elevation of the sensor above the target's horizon, which is what
@@ -98,7 +96,6 @@ PRESETS: dict[str, Method] = {
         filter_otf="pybsm",
         turbulence_path_samples=10000,
         turbulence_path_rule="trapezoid",
-        grd_rule="pybsm",
         elevation="look-down",
         undersampling_threshold=4.0,
     ),
@@ -118,7 +115,6 @@ PRESETS: dict[str, Method] = {
         filter_otf="dtft",
         turbulence_path_samples=64,
         turbulence_path_rule="gauss-legendre",
-        grd_rule="first_crossing",
         elevation="target",
         undersampling_threshold=4.0,
     ),
@@ -128,12 +124,12 @@ PRESETS["fast"] = PRESETS["accurate"].replace(
 )
 
 
-def method(name: str | Method = "accurate", **knobs) -> Method:
+def method(preset: str | Method = "accurate", /, **knobs) -> Method:
     """Return a method preset by name, with any knobs overridden.
 
     Parameters
     ----------
-    name : str or Method
+    preset : str or Method
         "accurate" (default), "fast" or "pybsm", or a Method to modify.
     **knobs
         Knob overrides, e.g. ``frequency_samples=1601``.
@@ -142,10 +138,10 @@ def method(name: str | Method = "accurate", **knobs) -> Method:
     -------
     Method
     """
-    if isinstance(name, Method):
-        base = name
-    elif name in PRESETS:
-        base = PRESETS[name]
+    if isinstance(preset, Method):
+        base = preset
+    elif preset in PRESETS:
+        base = PRESETS[preset]
     else:
-        raise ValueError(f"method must be one of {sorted(PRESETS)} or a Method; got {name!r}")
+        raise ValueError(f"method must be one of {sorted(PRESETS)} or a Method; got {preset!r}")
     return base.replace(**knobs) if knobs else base

@@ -14,7 +14,8 @@ import xarray as xr
 from . import flags as fl
 from . import noise, radiometry
 from .atmosphere import atmosphere_at, open_atmosphere
-from .methods import Method, method as resolve_method
+from .methods import Method
+from .methods import method as resolve_method
 from .params import check_kind
 
 RELATIVE_EDGE_TOLERANCE = 1e-9
@@ -23,7 +24,7 @@ RELATIVE_EDGE_TOLERANCE = 1e-9
 
 @functools.lru_cache(maxsize=1)
 def database_wavelengths() -> np.ndarray:
-    """The atmosphere database's wavelength samples (0.3-14 um every 10 nm). [m]"""
+    """Wavelength samples of the atmosphere database, 0.3-14 um every 10 nm [m]."""
     return open_atmosphere()["wavelength"].values
 
 
@@ -279,6 +280,18 @@ def _band_curves(sensor: xr.Dataset, wavelength: xr.DataArray):
     return qe, transmission
 
 
+def _otf_weights(spectral_weights: xr.DataArray) -> xr.DataArray:
+    """Spectral weights for the polychromatic OTFs (paper Eq. 3).
+
+    Non-positive weights count as zero. Cells with no usable weight at all are
+    beyond the database (their SNR is NaN and flagged ``beyond_database``);
+    they get uniform weights so the OTF stays finite while the NIIRS is NaN.
+    """
+    weights = spectral_weights.where(spectral_weights > 0, 0.0)
+    usable = weights.sum("wavelength") > 0
+    return xr.where(usable, weights, 1.0)
+
+
 def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate"):
     """Predicted NIIRS by GIQE 3, 4 and 5 with every intermediate (paper Sec. 3).
 
@@ -335,7 +348,7 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate"):
     qe, transmission = _band_curves(s, weights["wavelength"])
     cutoff = s["aperture_diameter"] / cutoff_wavelength(s, weights["wavelength"], qe, transmission)
     nodes, quad_weights = edge_nodes(cutoff, ifov_x, ifov_y, m)
-    otf = system_otf(s, sc, nodes, spectral_weights=weights.where(weights > 0, 0.0),
+    otf = system_otf(s, sc, nodes, spectral_weights=_otf_weights(weights),
                      integration_time=r["integration_time"], slant_range=slant, method=m)
 
     ifov = xr.concat([ifov_x, ifov_y], dim="orientation").assign_coords(
@@ -449,7 +462,7 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method=
         frequency = xr.DataArray(frequency, dims="frequency", coords={"frequency": frequency},
                                  attrs={"units": "cycles/rad", "long_name": "spatial frequency"})
     slant = geometry.slant_range(scenario["ground_range"], scenario["altitude"])
-    out = _system_otf(sensor, scenario, frequency, spectral_weights=weights.where(weights > 0, 0.0),
+    out = _system_otf(sensor, scenario, frequency, spectral_weights=_otf_weights(weights),
                       integration_time=r["integration_time"], slant_range=slant, method=m, fy=fy)
     out.attrs["method"] = m.name
     return _drop_scalar_coords(out)

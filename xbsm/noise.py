@@ -51,7 +51,7 @@ def dark_current_noise(dark_current, integration_time, tdi_stages=1.0):
 
 
 def quantization_noise(well_range, bit_depth):
-    """Quantization noise of an ADC spanning ``well_range`` electrons.
+    r"""Quantization noise of an ADC spanning ``well_range`` electrons.
 
     Parameters
     ----------
@@ -69,7 +69,7 @@ def quantization_noise(well_range, bit_depth):
     -----
     One code step over the uniform-error standard deviation, implicit in IBSM Eq. 3-47:
 
-    .. math:: \\sigma_q = \\frac{N_{range}}{\\sqrt{12}\\,(2^b - 1)}
+    .. math:: \sigma_q = \frac{N_{range}}{\sqrt{12}\,(2^b - 1)}
     """
     return _named(
         well_range / (np.sqrt(12) * (2.0**bit_depth - 1.0)), "1", "quantization noise"
@@ -77,7 +77,7 @@ def quantization_noise(well_range, bit_depth):
 
 
 def noise_gain(kernel: xr.DataArray):
-    """Noise gain of a post-processing kernel (Leachtenauer et al. 1997).
+    r"""Noise gain of a post-processing kernel (Leachtenauer et al. 1997).
 
     Parameters
     ----------
@@ -87,7 +87,7 @@ def noise_gain(kernel: xr.DataArray):
     Returns
     -------
     xr.DataArray
-        :math:`\\sqrt{\\sum k^2}`. [1]
+        :math:`\sqrt{\sum k^2}`. [1]
 
     Notes
     -----

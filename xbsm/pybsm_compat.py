@@ -193,7 +193,9 @@ def scenario(**kw) -> xr.Dataset:
     elif ihaze in IHAZE_VISIBILITY:
         visibility = IHAZE_VISIBILITY[ihaze]
     else:
-        raise ValueError(f"ihaze must be 1 (23 km visibility) or 2 (5 km visibility); got {ihaze!r}")
+        raise ValueError(
+            f"ihaze must be 1 (23 km visibility) or 2 (5 km visibility); got {ihaze!r}"
+        )
     out = {"visibility": visibility}
     for key, value in kw.items():
         out[SCENARIO_NAMES[key]] = value

@@ -31,7 +31,7 @@ def _named(out, units, long_name):
 
 
 def blackbody_radiance(wavelength, temperature, constants: Constants = CODATA):
-    """Blackbody spectral radiance (Planck's law).
+    r"""Blackbody spectral radiance (Planck's law).
 
     Parameters
     ----------
@@ -49,11 +49,11 @@ def blackbody_radiance(wavelength, temperature, constants: Constants = CODATA):
 
     Notes
     -----
-    .. math:: L = \\frac{2hc^2}{\\lambda^5}\\frac{e^{-x}}{1 - e^{-x}},\\quad
-              x = \\frac{hc}{\\lambda k T}
+    .. math:: L = \frac{2hc^2}{\lambda^5}\frac{e^{-x}}{1 - e^{-x}},\quad
+              x = \frac{hc}{\lambda k T}
 
     IBSM Eq. 3-35. Written with :math:`e^{-x}` so that it underflows
-    gracefully to 0 instead of overflowing when :math:`\\lambda T` is small.
+    gracefully to 0 instead of overflowing when :math:`\lambda T` is small.
     """
     h, c, k = constants.planck, constants.speed_of_light, constants.boltzmann
     x = h * c / (wavelength * k * temperature)
@@ -62,7 +62,7 @@ def blackbody_radiance(wavelength, temperature, constants: Constants = CODATA):
 
 
 def total_radiance(atmosphere: xr.Dataset, reflectance, temperature, constants=CODATA):
-    """Spectral radiance at the aperture from a Lambertian target (paper Eq. 1).
+    r"""Spectral radiance at the aperture from a Lambertian target (paper Eq. 1).
 
     Parameters
     ----------
@@ -83,11 +83,11 @@ def total_radiance(atmosphere: xr.Dataset, reflectance, temperature, constants=C
 
     Notes
     -----
-    .. math:: L_{ap} = L_{pt} + (1 - r) L_{bb}(T)\\,\\tau + L_{ss} + L_{tr}\\,r / r_{db}
+    .. math:: L_{ap} = L_{pt} + (1 - r) L_{bb}(T)\,\tau + L_{ss} + L_{tr}\,r / r_{db}
 
     with :math:`r_{db} = 0.15`, the database reflectance. The database's
     SURF_EMIS column is not used: the target's own emission is
-    :math:`(1-r)L_{bb}\\tau`.
+    :math:`(1-r)L_{bb}\tau`.
     """
     wavelength = atmosphere["wavelength"]
     emitted = (1.0 - reflectance) * blackbody_radiance(wavelength, temperature, constants)
@@ -190,7 +190,7 @@ def throughput_factor(aperture_diameter, focal_length):
 
 
 def focal_plane_irradiance(radiance, aperture_diameter, focal_length):
-    """Focal-plane spectral irradiance from a radiance filling the pupil.
+    r"""Focal-plane spectral irradiance from a radiance filling the pupil.
 
     Parameters
     ----------
@@ -206,7 +206,7 @@ def focal_plane_irradiance(radiance, aperture_diameter, focal_length):
 
     Notes
     -----
-    .. math:: E = L\\,\\frac{\\pi}{1 + 4 (f/D)^2}
+    .. math:: E = L\,\frac{\pi}{1 + 4 (f/D)^2}
     """
     out = radiance * np.pi / (1.0 + 4.0 * (focal_length / aperture_diameter) ** 2.0)
     return _named(out, "W m-2 m-1", "focal-plane spectral irradiance")
@@ -214,7 +214,7 @@ def focal_plane_irradiance(radiance, aperture_diameter, focal_length):
 
 def cold_shield_self_emission(wavelength, cold_shield_temperature, aperture_diameter,
                               focal_length, constants=CODATA):
-    """Focal-plane irradiance from the cold shield outside the optics' cone.
+    r"""Focal-plane irradiance from the cold shield outside the optics' cone.
 
     Parameters
     ----------
@@ -234,7 +234,7 @@ def cold_shield_self_emission(wavelength, cold_shield_temperature, aperture_diam
 
     Notes
     -----
-    .. math:: E = \\left(\\pi - \\frac{\\pi}{1 + 4F^2}\\right) L_{bb}(T_{cs})
+    .. math:: E = \left(\pi - \frac{\pi}{1 + 4F^2}\right) L_{bb}(T_{cs})
     """
     solid = np.pi - np.pi / (4.0 * (focal_length / aperture_diameter) ** 2.0 + 1.0)
     out = solid * blackbody_radiance(wavelength, cold_shield_temperature, constants)
@@ -304,7 +304,7 @@ def optics_self_emission(wavelength, optics_temperature, optics_emissivity,
 
 def photon_detection_rate(irradiance, quantum_efficiency, detector_width_x,
                           detector_width_y, constants=CODATA):
-    """Spectral photoelectron generation rate of one detector (IBSM Eq. 3-42).
+    r"""Spectral photoelectron generation rate of one detector (IBSM Eq. 3-42).
 
     Parameters
     ----------
@@ -324,7 +324,7 @@ def photon_detection_rate(irradiance, quantum_efficiency, detector_width_x,
 
     Notes
     -----
-    .. math:: \\frac{dN}{d\\lambda} = \\frac{\\lambda}{hc}\\,\\eta(\\lambda)\\,w_x w_y\\,E(\\lambda)
+    .. math:: \frac{dN}{d\lambda} = \frac{\lambda}{hc}\,\eta(\lambda)\,w_x w_y\,E(\lambda)
     """
     wavelength = irradiance["wavelength"]
     out = (

@@ -270,7 +270,7 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.DataArray
 
 
 def _polychromatic_turbulence_kernel(radial, r0_ref, exposure, speed, diameter, wl, w):
-    """numpy kernel: weighted sum over the last (wavelength) axis, one wavelength at a time.
+    """Numpy kernel: weighted sum over the last (wavelength) axis, one wavelength at a time.
 
     Accumulating wavelength by wavelength keeps memory at one slice of the
     (frequency x scenario) block instead of materialising the wavelength axis.
