@@ -16,7 +16,11 @@ from pathlib import Path
 import xarray as xr
 
 from . import examples, model, plot
+from .flags import flag
 from .methods import PRESETS
+
+
+WELL_FILL = flag("well_fill_limited")  # informational, not a validity problem
 
 
 def _encode_for_netcdf(ds: xr.Dataset) -> xr.Dataset:
@@ -94,14 +98,16 @@ def run_olson(out: Path, method: str = "accurate") -> dict[str, xr.Dataset]:
     fig.savefig(out / "figure5_mtf.png", dpi=110)
     plt.close("all")
 
-    print("NIIRS (GIQE 3 / 4 / 5) at 9 km altitude:")
+    print("NIIRS (GIQE 3 / 4 / 5) at 9 km altitude (* outside the GIQE calibration ranges):")
     for band, ds in results.items():
         for vis in (23.0, 5.0):
             for gr in (0.0, 20e3, 100e3):
-                v = ds.niirs.sel(visibility=vis, ground_range=gr).values
+                point = ds.sel(visibility=vis, ground_range=gr)
+                marks = ["*" if int(f) & ~WELL_FILL else " " for f in point.flags.values]
                 print(f"  {band:3s} vis {vis:4.0f} km  range {gr / 1e3:5.0f} km: "
-                      + " / ".join(f"{x:5.2f}" for x in v)
-                      + f"   SNR {float(ds.snr.sel(visibility=vis, ground_range=gr)):8.2f}")
+                      + " / ".join(f"{x:9.2f}{m}" for x, m in zip(point.niirs.values, marks,
+                                                                   strict=True))
+                      + f"   SNR {float(point.snr):8.2f}")
     print(f"figures in {out}")
     return results
 

@@ -112,7 +112,7 @@ def mtf_breakdown(otf: xr.Dataset, focal_length: float, nyquist: float | None = 
     cycles_per_mm = otf["frequency"].values / focal_length * 1e-3
     order = np.argsort(cycles_per_mm)
     for name, da in otf.data_vars.items():
-        if "frequency" not in da.dims or name == "system":
+        if "frequency" not in da.dims or name in ("system", "system_unfiltered"):
             continue
         ax.plot(cycles_per_mm[order], np.abs(da.values)[order], label=name.replace("_", " "))
     ax.plot(cycles_per_mm[order], np.abs(otf["system"].values)[order], "k", lw=2, label="system")
