@@ -19,7 +19,6 @@ from . import examples, model, plot
 from .flags import flag
 from .methods import PRESETS
 
-
 WELL_FILL = flag("well_fill_limited")  # informational, not a validity problem
 
 
