@@ -253,7 +253,11 @@ SCALARS = {
 }
 
 
-def run_case(case):
+REFLECTANCE_CASES = 30
+"""reflectance_to_photoelectrons is recorded for the first cases only (it is slow in pyBSM)."""
+
+
+def run_case(case, with_reflectance=False):
     sensor, scenario = build(case)
     n = metrics.niirs(sensor=sensor, scenario=scenario, interp=case["interp"])
     sensor5, scenario5 = build(case)
@@ -284,6 +288,16 @@ def run_case(case):
                                      target_radiance=tgt, background_radiance=bkg)
     for key in ("snr", "int_time", "tgt_n", "bkg_n", "total_noise", "well_fraction"):
         out[f"scenario_{key}"] = float(getattr(s, key))
+    if with_reflectance:
+        sensor_r, _ = build(case)
+        _, pe, weights = radiance.reflectance_to_photoelectrons(
+            atm=np.hstack([atm[:, :1], atm[:, 1:]]), sensor=sensor_r,
+            int_time=sensor_r.int_time)
+        out["reflectance_pe"] = pe
+        out["reflectance_weights"] = weights[1]
+    else:
+        out["reflectance_pe"] = np.full(100, np.nan)
+        out["reflectance_weights"] = np.full(1, np.nan)
     return out
 
 
@@ -297,7 +311,7 @@ def main():
     kept = []
     for case in cases:
         try:
-            outputs.append(run_case(case))
+            outputs.append(run_case(case, with_reflectance=len(kept) < REFLECTANCE_CASES))
             kept.append(case)
         except Exception as exc:  # record what pyBSM cannot run, and skip it
             print(f"skipped {case['sensor']['name']}: {type(exc).__name__}: {exc}")

@@ -150,3 +150,27 @@ def test_interpolated_band_edges_respond_continuously():
     snapped = signal(0.503e-6, "pybsm") / signal(0.500e-6, "pybsm")
     assert 0.97 < exact < 0.995
     assert snapped < 0.95
+
+
+@pytest.mark.parametrize("index", range(30))
+def test_reflectance_to_photoelectrons_matches_pybsm(index):
+    # pyBSM 0.16.1 radiance.reflectance_to_photoelectrons (100 reflectances, 300 K target),
+    # recorded for the first 30 fixture cases by recipes/pybsm_reference.py
+    sensor, scenario = datasets(CASES[index])
+    r = xbsm.model.reflectance_to_photoelectrons(sensor, scenario, method="pybsm")
+    np.testing.assert_allclose(r.photoelectrons.values, OUTPUTS["reflectance_pe"][index],
+                               rtol=1e-9, atol=1e-9 * float(r.photoelectrons.max()))
+    weights = OUTPUTS["reflectance_weights"][index]
+    weights = weights[np.isfinite(weights)]
+    np.testing.assert_allclose(r.spectral_weights.values, weights, rtol=1e-9)
+
+
+def test_reflectance_to_photoelectrons_is_linear_and_saturates_at_the_well():
+    sc = xbsm.scenario(altitude=9000.0, ground_range=0.0, visibility=23.0)
+    s = olson("nir")
+    r = xbsm.model.reflectance_to_photoelectrons(s, sc, reflectance=[0.0, 0.5, 1.0])
+    pe = r.photoelectrons.values
+    assert pe[1] - pe[0] == pytest.approx(pe[2] - pe[1], rel=1e-12)  # paper Eq. 1 is linear
+    long_exposure = xbsm.model.reflectance_to_photoelectrons(s, sc, integration_time=10.0)
+    assert float(long_exposure.photoelectrons.max()) == pytest.approx(96000.0)
+    assert has_flag(long_exposure.flags, "well_fill_limited").item()

@@ -107,6 +107,38 @@ def _drop_scalar_coords(ds: xr.Dataset) -> xr.Dataset:
     return ds.drop_vars([c for c in ds.coords if ds[c].ndim == 0 and c not in ds.dims])
 
 
+def _focal_plane_terms(s: xr.Dataset, wavelength: xr.DataArray, k):
+    """Optics throughput, QE and sensor-made irradiance on the band (paper Eq. 2).
+
+    Returns (optics transmission incl. cold filter and obscuration [1], quantum
+    efficiency [1], self-emission plus stray irradiance [W m-2 m-1]).
+    """
+    diameter, focal = s["aperture_diameter"], s["focal_length"]
+    optics = (
+        s["cold_filter_transmission"]
+        * (1.0 - s["obscuration_ratio"] ** 2)
+        * radiometry.resample_spectral(s["optics_transmission"], wavelength, "optics_transmission")
+    )
+    qe = radiometry.resample_spectral(s["quantum_efficiency"], wavelength, "quantum_efficiency")
+    self_emission = (
+        radiometry.cold_shield_self_emission(
+            wavelength, s["cold_shield_temperature"], diameter, focal, k
+        )
+        + radiometry.optics_self_emission(
+            wavelength, s["optics_temperature"], s["optics_emissivity"],
+            s["cold_filter_transmission"], diameter, focal, k,
+        )
+        + radiometry.cold_stop_self_emission(
+            wavelength, s["cold_filter_temperature"], s["cold_filter_emissivity"],
+            diameter, focal, k,
+        )
+    )
+    other_irradiance = self_emission + radiometry.resample_spectral(
+        s["stray_irradiance"], wavelength, "stray_irradiance"
+    )
+    return optics, qe, other_irradiance
+
+
 def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets="giqe"):
     """Contrast signal-to-noise ratio and its breakdown (paper Sec. 2.2-2.3, Figure 4).
 
@@ -157,29 +189,8 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
             atm, sc["background_reflectance"], sc["background_temperature"], k
         )
 
+    optics, qe, other_irradiance = _focal_plane_terms(s, wavelength, k)
     diameter, focal = s["aperture_diameter"], s["focal_length"]
-    optics = (
-        s["cold_filter_transmission"]
-        * (1.0 - s["obscuration_ratio"] ** 2)
-        * radiometry.resample_spectral(s["optics_transmission"], wavelength, "optics_transmission")
-    )
-    qe = radiometry.resample_spectral(s["quantum_efficiency"], wavelength, "quantum_efficiency")
-    self_emission = (
-        radiometry.cold_shield_self_emission(
-            wavelength, s["cold_shield_temperature"], diameter, focal, k
-        )
-        + radiometry.optics_self_emission(
-            wavelength, s["optics_temperature"], s["optics_emissivity"],
-            s["cold_filter_transmission"], diameter, focal, k,
-        )
-        + radiometry.cold_stop_self_emission(
-            wavelength, s["cold_filter_temperature"], s["cold_filter_emissivity"],
-            diameter, focal, k,
-        )
-    )
-    other_irradiance = self_emission + radiometry.resample_spectral(
-        s["stray_irradiance"], wavelength, "stray_irradiance"
-    )
 
     def detected(irradiance):
         return radiometry.photon_detection_rate(
@@ -266,6 +277,79 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
     )
     out.attrs["method"] = m.name
     out.attrs["targets"] = targets
+    return _drop_scalar_coords(out)
+
+
+def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, reflectance=None,
+                                  method="accurate", *, temperature=300.0,
+                                  integration_time=None) -> xr.Dataset:
+    """Photoelectrons per pixel from Lambertian targets of given reflectance.
+
+    The radiometric mapping an image simulation applies to a reflectance map
+    (pyBSM's ``reflectance_to_photoelectrons``).
+
+    Parameters
+    ----------
+    sensor, scenario : xr.Dataset
+        From :func:`xbsm.sensor` and :func:`xbsm.scenario`.
+    reflectance : xr.DataArray or array_like, optional
+        Target reflectances; default 100 values from 0 to 1 (dim ``reflectance``). [1]
+    method : str or Method
+        Knobs ``constants``, ``atmosphere_interpolation``, ``band_edges``.
+    temperature : float or xr.DataArray
+        Target temperature (pyBSM fixes 300 K). [K]
+    integration_time : float or xr.DataArray, optional
+        Default the sensor's maximum integration time. [s]
+
+    Returns
+    -------
+    xr.Dataset
+        ``photoelectrons`` over ``reflectance`` (and the sweep dims), scaled so
+        that the brightest reflectance fills the well at most (pyBSM's rule);
+        ``integration_time`` after that scaling; ``spectral_weights``, the
+        spectral photoelectron rate of the brightest target normalised to a
+        peak of 1; ``flags`` (``well_fill_limited`` where scaled).
+
+    Notes
+    -----
+    Paper Eq. 1 and 2 with the dark current; the count is linear in
+    reflectance (Eq. 1 is).
+    """
+    check_kind(sensor, "sensor", "sensor")
+    check_kind(scenario, "scenario", "scenario")
+    m = resolve_method(method)
+    s, k = sensor, m.constants
+    if reflectance is None:
+        reflectance = np.linspace(0.0, 1.0, 100)
+    if not isinstance(reflectance, xr.DataArray):
+        values = np.asarray(reflectance, dtype=float)
+        reflectance = xr.DataArray(values, dims="reflectance", coords={"reflectance": values})
+    if integration_time is None:
+        integration_time = s["integration_time"]
+    atm = band_atmosphere(s, scenario, m)
+    wavelength = atm["wavelength"]
+    optics, qe, other_irradiance = _focal_plane_terms(s, wavelength, k)
+    radiance = radiometry.total_radiance(atm, reflectance, temperature, k)
+    irradiance = optics * radiometry.focal_plane_irradiance(
+        radiance, s["aperture_diameter"], s["focal_length"]) + other_irradiance
+    spectral = radiometry.photon_detection_rate(
+        irradiance, qe, s["detector_width_x"], s["detector_width_y"], k)
+    rate = radiometry.band_integral(spectral) + s["dark_current"]
+    counts = rate * integration_time * s["tdi_stages"]
+    saturation = counts.max("reflectance") / s["max_well"]
+    scale = xr.where(saturation > 1.0, 1.0 / saturation, 1.0)
+    counts = np.minimum(counts * scale, s["max_well"])
+    brightest = spectral.isel(reflectance=-1, drop=True)
+    flags = fl.set_flag(atm["flags"], "well_fill_limited", scale < 1.0)
+    out = xr.Dataset({
+        "photoelectrons": counts.assign_attrs(units="1", long_name="photoelectrons per pixel"),
+        "integration_time": (integration_time * scale).assign_attrs(
+            units="s", long_name="integration time after the well limit"),
+        "spectral_weights": (brightest / brightest.max("wavelength")).assign_attrs(
+            units="1", long_name="normalised spectral photoelectron rate"),
+        "flags": flags,
+    })
+    out.attrs["method"] = m.name
     return _drop_scalar_coords(out)
 
 
