@@ -64,7 +64,10 @@ class Method:
     projects the GSD onto the ground; smaller by the central angle)."""
     undersampling_threshold: float
     """Flag ``undersampled_grid`` when a uniform edge rule has fewer samples than this per
-    period of sin(2 pi f ifov x) at x = 3 px."""
+    period of sin(2 pi f ifov x) at x = 3 px. 2.0 flags wherever the NIIRS error of the
+    uniform rule may exceed 0.01 (at 2 samples or more the worst measured error over
+    Q = 0.02-2 and N = 101-1601 is 0.006; docs/speed_accuracy.md); at N = 101 that is
+    Q = lambda F# / p < 0.12."""
 
     def replace(self, **knobs) -> Method:
         """A copy with some knobs changed."""
@@ -97,7 +100,7 @@ PRESETS: dict[str, Method] = {
         turbulence_path_samples=10000,
         turbulence_path_rule="trapezoid",
         elevation="look-down",
-        undersampling_threshold=4.0,
+        undersampling_threshold=2.0,
     ),
     "accurate": Method(
         name="accurate",
@@ -116,7 +119,7 @@ PRESETS: dict[str, Method] = {
         turbulence_path_samples=64,
         turbulence_path_rule="gauss-legendre",
         elevation="target",
-        undersampling_threshold=4.0,
+        undersampling_threshold=2.0,
     ),
 }
 PRESETS["fast"] = PRESETS["accurate"].replace(
