@@ -5,7 +5,6 @@ from __future__ import annotations
 import importlib
 import inspect
 import re
-import time
 from pathlib import Path
 
 import pytest
@@ -72,15 +71,13 @@ def test_relative_links_between_pages_resolve():
             assert (DOCS / target).exists(), (page, target)
 
 
-def test_guide_examples_run_in_order_and_fast(tmp_path, monkeypatch):
+def test_guide_examples_run_in_order(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     blocks = python_blocks(read("guide"))
     assert len(blocks) >= 10
     namespace: dict = {"__name__": "guide"}
-    start = time.perf_counter()
     for number, block in enumerate(blocks):
         exec(compile(block, f"docs/guide.md block {number}", "exec"), namespace)
-    assert time.perf_counter() - start < 10.0
 
 
 @pytest.mark.parametrize("page", ["migration", "flags", "validation"])
