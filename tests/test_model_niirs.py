@@ -230,3 +230,39 @@ def test_system_otf_breakdown():
     np.testing.assert_allclose(at_zero.values, 1.0, rtol=1e-12)
     # the aperture does not depend on range: no scenario dims were broadcast into it
     assert set(otf.aperture.dims) <= {"frequency", "orientation"}
+
+
+def test_reference_cases_a3_a4_mwir_with_the_dropped_band_edge():
+    # pybsm_test_cases.md A3/A4 [T]: MWIR 2.91-3.66 um; pyBSM drops the 2.91 um sample
+    # (float >= comparison), which method="pybsm" reproduces (band_edges="exact")
+    s = xbsm.pybsm_compat.sensor(name="MWIR", D=0.275, f=4, p_x=8e-6,
+                                 opt_trans_wavelengths=np.array([2.91e-6, 3.66e-6]))
+    sc = xbsm.pybsm_compat.scenario(name="SCN", ihaze=1, altitude=9000, ground_range=0.0)
+    n = model.niirs(s, sc, method="pybsm")
+    assert float(n.niirs.sel(giqe=3)) == pytest.approx(8.386341951998698, abs=1e-8)
+    assert float(n.niirs.sel(giqe=4)) == pytest.approx(7.815086681552632, abs=1e-8)
+    assert float(n.niirs.sel(giqe=5)) == pytest.approx(8.620260429553129, abs=1e-8)
+    assert float(n.rer) == pytest.approx(0.13380874869777215, rel=1e-9)
+    assert float(n.eho) == pytest.approx(0.6624829469264828, rel=1e-9)
+    assert float(n.snr) == pytest.approx(25.217449975085515, rel=1e-9)
+    assert float(n.coherence_diameter) == pytest.approx(4.4692507394906835, rel=1e-9)
+    assert float(n.cutoff_frequency) == pytest.approx(94178.08219178084, rel=1e-12)
+
+
+def test_reference_case_a6_olson_red_low_visibility():
+    # pybsm_test_cases.md A6 [C]: Olson red band, ihaze 2, 9 km altitude, nadir
+    s = xbsm.pybsm_compat.sensor(
+        D=0.275, f=4.0, p_x=8e-6, opt_trans_wavelengths=np.array([0.50e-6, 0.66e-6]),
+        eta=0.4, int_time=0.03, read_noise=25.0, max_n=96000, bit_depth=11.9,
+        max_well_fill=0.6, s_x=0.5e-6, s_y=0.5e-6, da_x=100e-6, da_y=100e-6,
+        qe=np.array([0.8, 0.8]), optics_transmission=np.array([0.5, 0.5]),
+        dark_current=1e-5 * 8e-6 * 8e-6 / 1.60217662e-19)
+    sc = xbsm.pybsm_compat.scenario(ihaze=2, altitude=9000, ground_range=0.0,
+                                    aircraft_speed=100)
+    n = model.niirs(s, sc, method="pybsm")
+    assert float(n.niirs.sel(giqe=3)) == pytest.approx(9.522427179922438, abs=1e-8)
+    assert float(n.niirs.sel(giqe=4)) == pytest.approx(8.895972852352036, abs=1e-8)
+    assert float(n.niirs.sel(giqe=5)) == pytest.approx(9.802914580025174, abs=1e-8)
+    assert float(n.rer) == pytest.approx(0.35929735007408714, rel=1e-9)
+    assert float(n.snr) == pytest.approx(24.240534034843986, rel=1e-9)
+    assert float(n.coherence_diameter) == pytest.approx(0.522986052797111, rel=1e-9)
