@@ -66,6 +66,19 @@ def test_cube_holds_every_database_spectrum_bit_for_bit_and_nothing_else(raw_cub
     assert np.count_nonzero(~np.isnan(raw_cube[..., 0, 0])) == 3430
 
 
+def test_coverage_matches_the_database_horizon(db):
+    # paper Appendix A / fileDecoder.csv: ranges stop at the horizon of each altitude:
+    # 8 ground ranges at 2 m, all 97 from 8 km up to 24.5 km, only nadir at 550 km
+    counts = db.present.sum(axis=2)  # (visibility, altitude)
+    altitude = list(db.altitude)
+    for v in range(2):
+        assert counts[v, altitude.index(2.0)] == 8
+        for a in (8000.0, 12000.0, 20000.0, 24500.0):
+            assert counts[v, altitude.index(a)] == 97
+        assert counts[v, altitude.index(550e3)] == 1
+    assert counts.sum() == 3430
+
+
 def test_cube_raw_samples_match_the_database_values(raw_cube):
     fixture = json.loads((FIXTURES / "atmosphere_checksums.json").read_text())
     with netCDF4.Dataset(atm.database_path()) as nc:
