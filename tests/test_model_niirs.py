@@ -266,3 +266,20 @@ def test_reference_case_a6_olson_red_low_visibility():
     assert float(n.rer) == pytest.approx(0.35929735007408714, rel=1e-9)
     assert float(n.snr) == pytest.approx(24.240534034843986, rel=1e-9)
     assert float(n.coherence_diameter) == pytest.approx(0.522986052797111, rel=1e-9)
+
+
+def test_system_otf_on_a_2d_grid_gives_a_centred_psf():
+    # the 2-D grid only when asked for: fx and fy with dims of their own
+    from xbsm.otf.psf import otf_to_psf
+
+    f = np.linspace(-6e5, 6e5, 65)  # odd grid, f = 0 in the middle [cycles/rad]
+    fx = xr.DataArray(f, dims="fx", coords={"fx": f})
+    fy = xr.DataArray(f, dims="fy", coords={"fy": f})
+    otf = model.system_otf(olson_sensor("red"), olson_scenario(ground_range=20e3, visibility=23.0),
+                           fx, fy=fy)
+    assert set(otf.system.dims) == {"fx", "fy"}
+    assert float(otf.system.sel(fx=0.0, fy=0.0)) == pytest.approx(1.0, rel=1e-12)
+    psf = otf_to_psf(otf.system.transpose("fy", "fx"))
+    assert float(psf.sum()) == pytest.approx(1.0, rel=1e-12)
+    peak = np.unravel_index(int(np.argmax(psf.values)), psf.shape)
+    assert peak == (32, 32)  # the symmetric PSF peaks at the centre sample
