@@ -430,7 +430,7 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate"):
     ifov_y = geometry.ifov(s["pixel_pitch_y"], s["focal_length"])
     weights = r["spectral_weights"]
     qe, transmission = _band_curves(s, weights["wavelength"])
-    cutoff = s["aperture_diameter"] / cutoff_wavelength(s, weights["wavelength"], qe, transmission)
+    cutoff = s["aperture_diameter"] / cutoff_wavelength(weights["wavelength"], qe, transmission)
     nodes, quad_weights = edge_nodes(cutoff, ifov_x, ifov_y, m)
     otf = system_otf(s, sc, nodes, spectral_weights=_otf_weights(weights),
                      integration_time=r["integration_time"], slant_range=slant, method=m)
@@ -539,7 +539,7 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method=
     if frequency is None:
         qe, transmission = _band_curves(sensor, weights["wavelength"])
         cutoff = float((sensor["aperture_diameter"] / cutoff_wavelength(
-            sensor, weights["wavelength"], qe, transmission)).max())
+            weights["wavelength"], qe, transmission)).max())
         frequency = np.linspace(0.0, cutoff, 201)
     if not isinstance(frequency, xr.DataArray):
         frequency = np.asarray(frequency, dtype=float)

@@ -32,13 +32,11 @@ def _named(da, long_name):
     return da.assign_attrs(units="1", long_name=long_name)
 
 
-def cutoff_wavelength(sensor: xr.Dataset, wavelength: xr.DataArray, qe, transmission):
+def cutoff_wavelength(wavelength: xr.DataArray, qe, transmission):
     """Shortest band wavelength that contributes signal (where QE x transmission > 0).
 
     Parameters
     ----------
-    sensor : xr.Dataset
-        Sensor parameters (unused except for their dims).
     wavelength : xr.DataArray
         Band wavelengths. [m]
     qe, transmission : xr.DataArray or float
