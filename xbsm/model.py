@@ -179,8 +179,10 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
     wavelength = atm["wavelength"]
     if targets == "giqe":
         emissive = radiometry.is_emissive_band(float(s["wavelength_min"]))
-        target_radiance = radiometry.giqe_target_radiance(atm, emissive, k)
-        background_radiance = radiometry.giqe_background_radiance(atm, emissive, k)
+        target_radiance = radiometry.giqe_radiance(atm, radiometry.GIQE_TARGET, emissive, k)
+        background_radiance = radiometry.giqe_radiance(
+            atm, radiometry.GIQE_BACKGROUND, emissive, k
+        )
     else:
         target_radiance = radiometry.total_radiance(
             atm, sc["target_reflectance"], sc["target_temperature"], k
