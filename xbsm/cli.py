@@ -18,6 +18,7 @@ import xarray as xr
 from . import examples, model, plot
 from .flags import flag
 from .methods import PRESETS
+from .methods import method as resolve_method
 
 WELL_FILL = flag("well_fill_limited")  # informational, not a validity problem
 
@@ -46,10 +47,11 @@ def run_olson(out: Path, method: str = "accurate") -> dict[str, xr.Dataset]:
     for band in examples.OLSON_BANDS:
         sensor = examples.olson_sensor(band)
         scenario = examples.olson_scenario()
-        n = model.niirs(sensor, scenario, method=method)
-        s = model.snr(sensor, scenario, method=method).drop_vars("spectral_weights")
-        ds = xr.merge([s.drop_vars(["snr", "integration_time", "flags"]), n],
-                      compat="override")
+        m = resolve_method(method)
+        s = model.snr(sensor, scenario, m)
+        n = model._niirs_from_snr(sensor, scenario, m, s)  # one radiometry pass for both
+        breakdown = s.drop_vars(["snr", "integration_time", "flags", "spectral_weights"])
+        ds = xr.merge([breakdown, n], compat="override")
         ds.attrs.update(
             title=f"xbsm: NIIRS and SNR of the Olson camera, {band} band",
             source="xbsm olson (LeMaster & Eismann 2017, Sec. 3)", method=method,

@@ -411,14 +411,16 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate"):
     without the post-processing filter (as pyBSM's ``niirs5``), GIQE 3 and 4
     with it, with its noise gain.
     """
-    from . import geometry, metrics
-    from .otf.system import cutoff_wavelength, edge_nodes, samples_per_oscillation, system_otf
-
     check_kind(sensor, "sensor", "sensor")
     check_kind(scenario, "scenario", "scenario")
     m = resolve_method(method)
-    s, sc = sensor, scenario
-    r = snr(s, sc, m)
+    return _niirs_from_snr(sensor, scenario, m, snr(sensor, scenario, m))
+
+
+def _niirs_from_snr(s: xr.Dataset, sc: xr.Dataset, m: Method, r: xr.Dataset) -> xr.Dataset:
+    """The NIIRS chain after the radiometry, for a :func:`snr` result ``r`` of (s, sc, m)."""
+    from . import geometry, metrics
+    from .otf.system import cutoff_wavelength, edge_nodes, samples_per_oscillation, system_otf
 
     slant = geometry.slant_range(sc["ground_range"], sc["altitude"])
     if m.elevation == "look-down":
