@@ -80,44 +80,76 @@ def test_pybsm_method_matches_pybsm_niirs(parity_results, giqe, key):
     assert finite >= 150
 
 
-def test_reference_case_a1_visible_sensor_at_nadir():
-    # pybsm_test_cases.md A1/A2 [T]: pyBSM's own test snapshots
-    s = xbsm.pybsm_compat.sensor(name="VIS", D=0.275, f=4, p_x=8e-6,
-                                 opt_trans_wavelengths=np.array([0.50e-6, 0.66e-6]))
-    sc = xbsm.pybsm_compat.scenario(name="SCN", ihaze=1, altitude=9000, ground_range=0.0)
-    n = model.niirs(s, sc, method="pybsm")
-    assert float(n.niirs.sel(giqe=3)) == pytest.approx(10.048636441352345, abs=1e-8)
-    assert float(n.niirs.sel(giqe=4)) == pytest.approx(9.36816615042465, abs=1e-8)
-    assert float(n.niirs.sel(giqe=5)) == pytest.approx(10.05230879223981, abs=1e-8)
-    assert float(n.rer) == pytest.approx(0.544879982245952, rel=1e-9)
-    assert float(n.eho) == pytest.approx(0.9331805194877623, rel=1e-9)
-    assert float(n.snr) == pytest.approx(758.4695956880196, rel=1e-9)
-    assert float(n.coherence_diameter) == pytest.approx(0.524916508790682, rel=1e-9)
-    assert float(n.cutoff_frequency) == pytest.approx(550000.0000000001, rel=1e-12)
-    # NIIRS above 9 is beyond the rating scale: flagged, not clipped
+def olson_compat(band_edges, qe, **extra):
+    """The paper's Olson camera (Table 2) through pyBSM keywords (pybsm_test_cases.md A5, A6)."""
+    return dict(
+        D=0.275, f=4.0, p_x=8e-6, opt_trans_wavelengths=np.array(band_edges), eta=0.4,
+        int_time=0.03, read_noise=25.0, max_n=96000, bit_depth=11.9, max_well_fill=0.6,
+        s_x=0.5e-6, s_y=0.5e-6, da_x=100e-6, da_y=100e-6, qe=np.array([qe, qe]),
+        optics_transmission=np.array([0.5, 0.5]),
+        dark_current=1e-5 * 8e-6 * 8e-6 / 1.60217662e-19, **extra)
+
+
+# pybsm_test_cases.md section A: pyBSM inputs and its outputs. [T] = pyBSM's own test
+# snapshots, [C] = computed with pyBSM 0.16.1. Tolerances: 1e-8 absolute on NIIRS,
+# 1e-9 relative on the rest, 1e-12 relative on pure geometry.
+REFERENCE_CASES = {
+    # A1/A2 [T]: visible sensor at nadir
+    "A1": (dict(name="VIS", D=0.275, f=4, p_x=8e-6,
+                opt_trans_wavelengths=np.array([0.50e-6, 0.66e-6])),
+           dict(name="SCN", ihaze=1, altitude=9000, ground_range=0.0),
+           {"niirs3": 10.048636441352345, "niirs4": 9.36816615042465,
+            "niirs5": 10.05230879223981, "rer": 0.544879982245952,
+            "eho": 0.9331805194877623, "snr": 758.4695956880196,
+            "coherence_diameter": 0.524916508790682,
+            "cutoff_frequency": (550000.0000000001, 1e-12)}),
+    # A3/A4 [T]: MWIR 2.91-3.66 um; pyBSM drops the 2.91 um sample (float >= comparison),
+    # which method="pybsm" reproduces (band_edges="exact")
+    "A3": (dict(name="MWIR", D=0.275, f=4, p_x=8e-6,
+                opt_trans_wavelengths=np.array([2.91e-6, 3.66e-6])),
+           dict(name="SCN", ihaze=1, altitude=9000, ground_range=0.0),
+           {"niirs3": 8.386341951998698, "niirs4": 7.815086681552632,
+            "niirs5": 8.620260429553129, "rer": 0.13380874869777215,
+            "eho": 0.6624829469264828, "snr": 25.217449975085515,
+            "coherence_diameter": 4.4692507394906835,
+            "cutoff_frequency": (94178.08219178084, 1e-12)}),
+    # A5 [C]: the paper's Olson camera, NIR, ihaze 1, 9 km altitude, 20 km ground range
+    "A5": (olson_compat([0.55e-6, 0.85e-6], 0.71),
+           dict(ihaze=1, altitude=9000, ground_range=20000, aircraft_speed=100),
+           {"slant_range": (21944.568747898647, 1e-12), "niirs3": 8.180362337723714,
+            "niirs4": 6.990223083421799, "niirs5": 8.252057802116985,
+            "rer": 0.33209462427356395, "eho": 0.8308998136005951,
+            "snr": 45.62499378465095, "integration_time": 0.016394490514314956,
+            "gsd_w": (0.05479621447912214, 1e-12)}),
+    # A6 [C]: Olson red band, ihaze 2, 9 km altitude, nadir
+    "A6": (olson_compat([0.50e-6, 0.66e-6], 0.8),
+           dict(ihaze=2, altitude=9000, ground_range=0.0, aircraft_speed=100),
+           {"niirs3": 9.522427179922438, "niirs4": 8.895972852352036,
+            "niirs5": 9.802914580025174, "rer": 0.35929735007408714,
+            "snr": 24.240534034843986, "coherence_diameter": 0.522986052797111}),
+}
+
+
+@pytest.mark.parametrize("case", sorted(REFERENCE_CASES))
+def test_reference_cases_of_pybsm(case):
+    sensor_kw, scenario_kw, expected = REFERENCE_CASES[case]
+    n = model.niirs(xbsm.pybsm_compat.sensor(**sensor_kw),
+                    xbsm.pybsm_compat.scenario(**scenario_kw), method="pybsm")
+    for name, value in expected.items():
+        if name.startswith("niirs"):
+            ours = float(n.niirs.sel(giqe=int(name[-1])))
+            assert ours == pytest.approx(value, abs=1e-8), (case, name)
+        else:
+            value, rel = value if isinstance(value, tuple) else (value, 1e-9)
+            assert float(n[name]) == pytest.approx(value, rel=rel), (case, name)
+
+
+def test_niirs_above_the_scale_is_flagged_not_clipped():
+    # reference case A1 predicts GIQE 3 NIIRS 10.05: beyond the rating scale
+    sensor_kw, scenario_kw, _ = REFERENCE_CASES["A1"]
+    n = model.niirs(xbsm.pybsm_compat.sensor(**sensor_kw),
+                    xbsm.pybsm_compat.scenario(**scenario_kw), method="pybsm")
     assert bool(has_flag(n.flags.sel(giqe=3), "niirs_out_of_scale"))
-
-
-def test_reference_case_a5_olson_nir():
-    # pybsm_test_cases.md A5 [C]: the paper's Olson camera, NIR, ihaze 1, 9 km, 20 km
-    s = xbsm.pybsm_compat.sensor(
-        D=0.275, f=4.0, p_x=8e-6, opt_trans_wavelengths=np.array([0.55e-6, 0.85e-6]),
-        eta=0.4, int_time=0.03, read_noise=25.0, max_n=96000, bit_depth=11.9,
-        max_well_fill=0.6, s_x=0.5e-6, s_y=0.5e-6, da_x=100e-6, da_y=100e-6,
-        qe=np.array([0.71, 0.71]), optics_transmission=np.array([0.5, 0.5]),
-        dark_current=1e-5 * 8e-6 * 8e-6 / 1.60217662e-19)
-    sc = xbsm.pybsm_compat.scenario(ihaze=1, altitude=9000, ground_range=20000,
-                                    aircraft_speed=100)
-    n = model.niirs(s, sc, method="pybsm")
-    assert float(n.slant_range) == pytest.approx(21944.568747898647, rel=1e-12)
-    assert float(n.niirs.sel(giqe=3)) == pytest.approx(8.180362337723714, abs=1e-8)
-    assert float(n.niirs.sel(giqe=4)) == pytest.approx(6.990223083421799, abs=1e-8)
-    assert float(n.niirs.sel(giqe=5)) == pytest.approx(8.252057802116985, abs=1e-8)
-    assert float(n.rer) == pytest.approx(0.33209462427356395, rel=1e-9)
-    assert float(n.eho) == pytest.approx(0.8308998136005951, rel=1e-9)
-    assert float(n.snr) == pytest.approx(45.62499378465095, rel=1e-9)
-    assert float(n.integration_time) == pytest.approx(0.016394490514314956, rel=1e-9)
-    assert float(n.gsd_w) == pytest.approx(0.05479621447912214, rel=1e-12)
 
 
 def test_accurate_method_is_close_to_pybsm_for_a_well_sampled_camera():
@@ -230,42 +262,6 @@ def test_system_otf_breakdown():
     np.testing.assert_allclose(at_zero.values, 1.0, rtol=1e-12)
     # the aperture does not depend on range: no scenario dims were broadcast into it
     assert set(otf.aperture.dims) <= {"frequency", "orientation"}
-
-
-def test_reference_cases_a3_a4_mwir_with_the_dropped_band_edge():
-    # pybsm_test_cases.md A3/A4 [T]: MWIR 2.91-3.66 um; pyBSM drops the 2.91 um sample
-    # (float >= comparison), which method="pybsm" reproduces (band_edges="exact")
-    s = xbsm.pybsm_compat.sensor(name="MWIR", D=0.275, f=4, p_x=8e-6,
-                                 opt_trans_wavelengths=np.array([2.91e-6, 3.66e-6]))
-    sc = xbsm.pybsm_compat.scenario(name="SCN", ihaze=1, altitude=9000, ground_range=0.0)
-    n = model.niirs(s, sc, method="pybsm")
-    assert float(n.niirs.sel(giqe=3)) == pytest.approx(8.386341951998698, abs=1e-8)
-    assert float(n.niirs.sel(giqe=4)) == pytest.approx(7.815086681552632, abs=1e-8)
-    assert float(n.niirs.sel(giqe=5)) == pytest.approx(8.620260429553129, abs=1e-8)
-    assert float(n.rer) == pytest.approx(0.13380874869777215, rel=1e-9)
-    assert float(n.eho) == pytest.approx(0.6624829469264828, rel=1e-9)
-    assert float(n.snr) == pytest.approx(25.217449975085515, rel=1e-9)
-    assert float(n.coherence_diameter) == pytest.approx(4.4692507394906835, rel=1e-9)
-    assert float(n.cutoff_frequency) == pytest.approx(94178.08219178084, rel=1e-12)
-
-
-def test_reference_case_a6_olson_red_low_visibility():
-    # pybsm_test_cases.md A6 [C]: Olson red band, ihaze 2, 9 km altitude, nadir
-    s = xbsm.pybsm_compat.sensor(
-        D=0.275, f=4.0, p_x=8e-6, opt_trans_wavelengths=np.array([0.50e-6, 0.66e-6]),
-        eta=0.4, int_time=0.03, read_noise=25.0, max_n=96000, bit_depth=11.9,
-        max_well_fill=0.6, s_x=0.5e-6, s_y=0.5e-6, da_x=100e-6, da_y=100e-6,
-        qe=np.array([0.8, 0.8]), optics_transmission=np.array([0.5, 0.5]),
-        dark_current=1e-5 * 8e-6 * 8e-6 / 1.60217662e-19)
-    sc = xbsm.pybsm_compat.scenario(ihaze=2, altitude=9000, ground_range=0.0,
-                                    aircraft_speed=100)
-    n = model.niirs(s, sc, method="pybsm")
-    assert float(n.niirs.sel(giqe=3)) == pytest.approx(9.522427179922438, abs=1e-8)
-    assert float(n.niirs.sel(giqe=4)) == pytest.approx(8.895972852352036, abs=1e-8)
-    assert float(n.niirs.sel(giqe=5)) == pytest.approx(9.802914580025174, abs=1e-8)
-    assert float(n.rer) == pytest.approx(0.35929735007408714, rel=1e-9)
-    assert float(n.snr) == pytest.approx(24.240534034843986, rel=1e-9)
-    assert float(n.coherence_diameter) == pytest.approx(0.522986052797111, rel=1e-9)
 
 
 def test_system_otf_on_a_2d_grid_gives_a_centred_psf():
