@@ -189,6 +189,22 @@ def _load_database(path: str) -> _Database:
     return _Database(cube=cube, present=present, **coords)
 
 
+def database_wavelengths(path=None) -> np.ndarray:
+    """Wavelength samples of the atmosphere database, 0.3-14 um every 10 nm [m].
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        Database file; see :func:`database_path`.
+
+    Returns
+    -------
+    numpy.ndarray
+        The ``wavelength`` coordinate (read once per process with the database). [m]
+    """
+    return _load_database(str(database_path(path))).wavelength
+
+
 def _bracket(values, nodes, log=False):
     """Lower/upper node index and weight of the upper node (0 exactly on a node).
 

@@ -6,26 +6,18 @@ named intermediate results; every sweep dimension of the inputs is kept.
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 import xarray as xr
 
 from . import flags as fl
 from . import noise, radiometry
-from .atmosphere import atmosphere_at, open_atmosphere
+from .atmosphere import atmosphere_at, database_wavelengths
 from .methods import Method
 from .methods import method as resolve_method
 from .params import check_kind
 
 RELATIVE_EDGE_TOLERANCE = 1e-9
 """Band edges closer than this (relative) to a database wavelength are on it."""
-
-
-@functools.lru_cache(maxsize=1)
-def database_wavelengths() -> np.ndarray:
-    """Wavelength samples of the atmosphere database, 0.3-14 um every 10 nm [m]."""
-    return open_atmosphere()["wavelength"].values
 
 
 def band_wavelengths(wavelength_min: float, wavelength_max: float, band_edges: str):
