@@ -121,9 +121,12 @@ def test_pybsm_method_with_1601_samples_matches_pybsm_on_a_1601_grid(row, index,
         assert np.abs(got - expected).max() > 1e-6  # the pyBSM artefact is still there
         return
     np.testing.assert_allclose(got, expected, rtol=0, atol=PARITY)
-    np.testing.assert_allclose(float(result["rer"]), GRID["rer_gm"][row], rtol=1e-12)
-    np.testing.assert_allclose(float(result["eho"]), GRID["eho_gm"][row], rtol=1e-12)
-    np.testing.assert_allclose(float(result["rer_giqe5"]), GRID["rer_giqe5"][row], rtol=1e-12)
+    # RER is a difference of two edge responses, each a sum of 800 sine terms: one-ulp
+    # differences between libm builds (numpy 1.24 vs 2.x) reach ~1e-12 relative (measured
+    # 1.06e-12 on case 28), so 1e-10, not a bit-level 1e-12
+    np.testing.assert_allclose(float(result["rer"]), GRID["rer_gm"][row], rtol=1e-10)
+    np.testing.assert_allclose(float(result["eho"]), GRID["eho_gm"][row], rtol=1e-10)
+    np.testing.assert_allclose(float(result["rer_giqe5"]), GRID["rer_giqe5"][row], rtol=1e-10)
 
 
 def test_1601_grid_differs_from_101_where_pybsm_undersamples():

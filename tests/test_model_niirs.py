@@ -6,7 +6,7 @@ import pytest
 import xarray as xr
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from pybsm_cases import datasets, load_cases
+from pybsm_cases import datasets, geometry_rtol, load_cases
 
 import xbsm
 from xbsm import model
@@ -49,9 +49,14 @@ def test_parity_fixture_has_at_least_150_cases_across_bands_and_mechanisms():
     ("slant_range", "slant_range", "slant_range"),
 ])
 def test_pybsm_method_matches_pybsm_edge_and_geometry_terms(parity_results, quantity, ours, theirs):
-    # pyBSM 0.16.1 niirs / niirs5 (interp=False on nodes), recipes/pybsm_reference.py
-    errors = [_relative(float(r[ours]), OUTPUTS[theirs][i]) for i, r in enumerate(parity_results)]
-    assert max(errors) <= 1e-9, (quantity, int(np.argmax(errors)), max(errors))
+    # pyBSM 0.16.1 niirs / niirs5 (interp=False on nodes), recipes/pybsm_reference.py;
+    # 1e-9 relative, or the rounding of pyBSM's own slant-range formula where that is larger
+    # (RER and EHO are in pixel units and do not depend on the slant range)
+    geometric = quantity in ("gsd", "gsd_w", "elevation", "slant_range")
+    for i, r in enumerate(parity_results):
+        rtol = geometry_rtol(CASES[i], OUTPUTS["slant_range"][i]) if geometric else 1e-9
+        error = _relative(float(r[ours]), OUTPUTS[theirs][i])
+        assert error <= rtol, (quantity, i, error, rtol)
 
 
 def test_pybsm_method_matches_pybsm_snr_after_stacking(parity_results):
@@ -71,7 +76,9 @@ def test_pybsm_method_matches_pybsm_niirs(parity_results, giqe, key):
         theirs = OUTPUTS[key][i]
         ours = float(r.niirs.sel(giqe=giqe))
         if np.isfinite(theirs):
-            assert abs(ours - theirs) <= 1e-8, (i, ours, theirs)
+            # 1e-8, or the GSD's rounding (d NIIRS = 3.32 d log10 GSD < 2 d GSD / GSD)
+            tol = max(1e-8, 2.0 * geometry_rtol(CASES[i], OUTPUTS["slant_range"][i]))
+            assert abs(ours - theirs) <= tol, (i, ours, theirs, tol)
             finite += 1
         else:
             # pyBSM returns -inf at SNR = 0; xbsm returns NaN and says why

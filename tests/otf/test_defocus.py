@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 from otf_helpers import check_lazy, polar
+from scipy.integrate import trapezoid
 
 from xbsm.otf.defocus import (
     gaussian_defocus,
@@ -17,7 +18,7 @@ from xbsm.otf.defocus import (
 def test_reference_value_case_20():
     # pybsm_test_cases.md C-20 [T]: defocus_OTF(u=[1], v=[1], w_x=1, w_y=1) = 0.007191883355826368
     out = gaussian_defocus(xr.DataArray([1.0]), xr.DataArray([1.0]), 1.0, 1.0)
-    np.testing.assert_allclose(out, [0.007191883355826368], rtol=1e-15)
+    np.testing.assert_allclose(out, [0.007191883355826368], rtol=1e-13)
 
 
 def test_is_the_transform_of_a_gaussian_psf():
@@ -25,9 +26,9 @@ def test_is_the_transform_of_a_gaussian_psf():
     w = 2e-6
     x = np.linspace(-20 * w, 20 * w, 40001)
     psf = np.exp(-4 * x**2 / w**2)
-    psf /= np.trapezoid(psf, x)
+    psf /= trapezoid(psf, x)
     f = np.array([0.0, 5e4, 1e5, 3e5, 6e5])
-    numeric = [np.trapezoid(psf * np.cos(2 * np.pi * fi * x), x) for fi in f]
+    numeric = [trapezoid(psf * np.cos(2 * np.pi * fi * x), x) for fi in f]
     out = gaussian_defocus(xr.DataArray(f, dims="frequency"), 0.0, w, 0.0)
     np.testing.assert_allclose(out, numeric, atol=1e-12)
 

@@ -56,8 +56,8 @@ def test_diffusion_is_one_at_zero_and_decreases():
     f = xr.DataArray(np.linspace(0, 2 * F / P, 50), dims="frequency")
     alpha = xr.DataArray([1e4, 1e5, 1e6], dims="wavelength")
     out = diffusion(f, 0 * f, alpha, 5e-6, 1e-5, F)
-    np.testing.assert_allclose(out.isel(frequency=0), 1.0, rtol=1e-15)
-    assert bool((out.diff("frequency") <= 0).all())
+    np.testing.assert_allclose(out.isel(frequency=0), 1.0, rtol=1e-14)
+    assert bool((out.diff("frequency") <= 1e-14).all())  # decreasing, to within rounding
     assert set(out.dims) == {"frequency", "wavelength"}
 
 

@@ -23,8 +23,8 @@ def test_path_coherence_diameter_reference_case_13():
 
 def test_hufnagel_valley_reference_case_14():
     # pybsm_test_cases.md C-14 [T]: (h=[1], v=0, cn2_at_1m=1) and (h=[1], v=1, cn2_at_1m=0)
-    assert t.hufnagel_valley(1.0, 0.0, 1.0) == pytest.approx(0.9900498337491683, rel=1e-15)
-    assert t.hufnagel_valley(1.0, 1.0, 0.0) == pytest.approx(2.698200599866689e-16, rel=1e-15)
+    assert t.hufnagel_valley(1.0, 0.0, 1.0) == pytest.approx(0.9900498337491683, rel=1e-13)
+    assert t.hufnagel_valley(1.0, 1.0, 0.0) == pytest.approx(2.698200599866689e-16, rel=1e-13)
 
 
 @pytest.mark.parametrize(
@@ -107,8 +107,9 @@ def test_turbulence_otf_limits():
     short = t.turbulence(fx, fy, 0.5e-6, 0.275, r0, 0.5)
     np.testing.assert_allclose(long.isel(frequency=0), 1.0)
     assert float(long.max()) <= 1.0
-    assert bool((short >= long).all())
-    assert bool((long.diff("frequency") <= 0).all())
+    # orderings to within rounding (values in [0, 1]; both are exp(0) = 1 at f = 0)
+    assert bool((short >= long - 1e-14).all())
+    assert bool((long.diff("frequency") <= 1e-14).all())
     blend = t.wind_blended_turbulence(fx, fy, 0.5e-6, 0.275, r0, 0.01, 0.0)
     xr.testing.assert_allclose(blend, short)  # no wind: short exposure
     blend = t.wind_blended_turbulence(fx, fy, 0.5e-6, 0.275, r0, 1e3, 1e3)

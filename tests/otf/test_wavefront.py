@@ -17,7 +17,7 @@ def test_random_phase_reference_case_18():
     # pybsm_test_cases.md C-18 [T]: wavefront_OTF(u=[[1]], v=[[1]], lambda0=1, pv=1, L_x=1,
     # L_y=1) = exp(-(1 - exp(-2)))
     np.testing.assert_allclose(
-        random_phase_wavefront(ONE, ONE, 1.0, 1.0, 1.0, 1.0), [[0.42119274782353533]], rtol=1e-15
+        random_phase_wavefront(ONE, ONE, 1.0, 1.0, 1.0, 1.0), [[0.42119274782353533]], rtol=1e-13
     )
 
 
@@ -38,7 +38,9 @@ def test_random_phase_limits_and_wavelength_scaling():
 def test_shannon_clipped_is_bounded_and_one_beyond_cutoff():
     fx, fy = polar(np.linspace(0, 2 * D / LAM, 41))
     out = shannon_wavefront(fx, fy, LAM, D, xr.DataArray([0.0, 0.1, 0.18], dims="w"))
-    assert float(out.min()) >= 0.0 and float(out.max()) <= 1.0
+    # in [0, 1] to within rounding: at 0.18 waves rms and half the cutoff the OTF is 0 exactly
+    # in arithmetic, so its computed sign is rounding
+    assert float(out.min()) >= -1e-14 and float(out.max()) <= 1.0 + 1e-14
     beyond = np.hypot(fx, fy) >= D / LAM
     np.testing.assert_allclose(out.where(beyond).dropna("frequency", how="all"), 1.0)
     # at nu = 0.5 the loss is (W/0.18)^2
