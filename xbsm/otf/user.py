@@ -34,6 +34,24 @@ def _check_outside(name, value, low, high):
         )
 
 
+def _radial_interp_kernel(rho, table, nodes, fill):
+    """Piecewise-linear interpolation of ``table[..., k]`` at ``rho`` (plain numpy).
+
+    ``rho`` and ``table[..., 0]`` broadcast against each other; ``nodes`` is increasing.
+    Outside ``[nodes[0], nodes[-1]]`` the result is ``fill``.
+    """
+    upper = np.clip(np.searchsorted(nodes, rho, side="right"), 1, nodes.size - 1)
+    x0, x1 = nodes[upper - 1], nodes[upper]
+    shape = np.broadcast_shapes(rho.shape, table.shape[:-1])
+    table = np.broadcast_to(table, shape + table.shape[-1:])
+    upper = np.broadcast_to(upper, shape)[..., None]
+    y0 = np.take_along_axis(table, upper - 1, axis=-1)[..., 0]
+    y1 = np.take_along_axis(table, upper, axis=-1)[..., 0]
+    out = y0 + (y1 - y0) / (x1 - x0) * (rho - x0)
+    inside = (rho >= nodes[0]) & (rho <= nodes[-1])
+    return np.where(inside, out, fill)
+
+
 def user_defined(fx, fy, table, outside="zero"):
     r"""OTF interpolated from a user table over radial frequency or over (fx, fy).
 
@@ -79,9 +97,11 @@ def user_defined(fx, fy, table, outside="zero"):
         rho = np.hypot(fx, fy)
         if outside == "error":
             _check_outside("radial frequency", rho, values[0], values[-1])
-        t = table.rename({"frequency": _RADIAL})
-        out = t.interp({_RADIAL: rho}, method="linear", kwargs=kwargs)
-        out = out.drop_vars(_RADIAL, errors="ignore")
+        out = xr.apply_ufunc(
+            _radial_interp_kernel, rho, table.drop_vars("frequency").rename(frequency=_RADIAL),
+            input_core_dims=[[], [_RADIAL]], kwargs={"nodes": values, "fill": fill},
+            dask="parallelized", output_dtypes=[np.result_type(table.dtype, float)],
+        )
     elif "fx" in table.dims and "fy" in table.dims:
         x, y = _check_axis(table, "fx"), _check_axis(table, "fy")
         if outside == "error":
