@@ -2,7 +2,8 @@
 
 pyBSM is never a dependency of xbsm: it lives in a virtual environment of its
 own (``recipes/_cache/pybsm-venv``, made on first use with
-``pip install pybsm==0.16.1``, or the interpreter named by ``$PYBSM_PYTHON``).
+``pip install pybsm==0.16.1``, or the interpreter named by ``$PYBSM_PYTHON``;
+see ``recipes/README.md`` and ``recipes/_pybsm_env.py``).
 The benchmark sends a job as JSON to a child process running in that
 environment with ``NUMBA_NUM_THREADS=1`` (pyBSM's parallel numba kernels
 oversubscribe a shared machine: 762 ms vs 53 ms median per ``niirs`` call,
@@ -16,10 +17,8 @@ import os
 import subprocess
 import sys
 import venv
-from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-VENV = HERE / "_cache" / "pybsm-venv"
+from _pybsm_env import MAKE_VENV, VENV, missing_pybsm_message
 
 CHILD = r'''
 import json, sys, time
@@ -83,7 +82,10 @@ def pybsm_python() -> str:
     if not python.exists():
         print(f"creating {VENV} with pybsm==0.16.1 ...", file=sys.stderr)
         venv.create(VENV, with_pip=True)
-        subprocess.run([str(python), "-m", "pip", "install", "-q", "pybsm==0.16.1"], check=True)
+        install = [str(python), "-m", "pip", "install", "-q", "pybsm==0.16.1"]
+        if subprocess.run(install).returncode:
+            raise SystemExit(f"could not install pybsm==0.16.1 into {VENV}; make it by hand "
+                             f"from the repository root:\n    {MAKE_VENV}")
     return str(python)
 
 
@@ -93,9 +95,15 @@ def run_pybsm(kind: str, cases: list[dict]) -> dict:
     Returns ``{"times": [s per case], "values": [...]}``.
     """
     env = dict(os.environ, NUMBA_NUM_THREADS="1", PYTHONWARNINGS="ignore")
+    python = pybsm_python()
     proc = subprocess.run(
-        [pybsm_python(), "-c", CHILD],
+        [python, "-c", CHILD],
         input=json.dumps({"kind": kind, "cases": cases}),
-        capture_output=True, text=True, env=env, check=True,
+        capture_output=True, text=True, env=env,
     )
+    if proc.returncode:
+        if "No module named 'pybsm" in proc.stderr:
+            raise SystemExit(missing_pybsm_message(python))
+        sys.stderr.write(proc.stderr)
+        proc.check_returncode()
     return json.loads(proc.stdout)

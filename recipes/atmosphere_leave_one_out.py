@@ -6,9 +6,10 @@ with the real table. The neighbours are twice as far apart as the real node
 spacing, so the errors are upper bounds: at the real spacing they are about a
 quarter as large (interpolation error grows with the square of the spacing).
 
-Run from the repository root (numbers go to docs/atmosphere.md)::
+Run from the repository root with the project environment (numbers go to
+docs/atmosphere.md; see ``recipes/README.md``)::
 
-    PYTHONPATH=. /work/devenv/bin/python recipes/atmosphere_leave_one_out.py
+    .venv/bin/python recipes/atmosphere_leave_one_out.py
 """
 
 from __future__ import annotations

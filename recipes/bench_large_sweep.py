@@ -6,7 +6,9 @@ chunks of 20,000 scenarios. Prints the time to build the graph, the time to
 compute NIIRS (GIQE 3, 4, 5), the time per scenario and the peak resident
 memory of the process; ``docs/benchmarks.md`` quotes one run.
 
-Usage: ``python recipes/bench_large_sweep.py [--scenarios 200000] [--chunk 20000]``.
+Run from the repository root with the project environment (see ``recipes/README.md``)::
+
+    .venv/bin/python recipes/bench_large_sweep.py [--scenarios 200000] [--chunk 20000]
 """
 
 from __future__ import annotations

@@ -10,7 +10,10 @@ The per-scenario ratio is pyBSM's median time per scenario over xbsm's time
 per scenario. Writes ``docs/benchmarks/bench_niirs.json`` and
 ``docs/figures/bench_niirs.png``; ``docs/benchmarks.md`` quotes them.
 
-Usage: ``python recipes/bench_niirs.py [--repeats 3]``.
+Run from the repository root with the project environment; pyBSM's own
+environment is made on first use (see ``recipes/README.md``)::
+
+    .venv/bin/python recipes/bench_niirs.py [--repeats 3]
 """
 
 from __future__ import annotations

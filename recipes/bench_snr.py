@@ -12,7 +12,10 @@ repeated runs are quoted. The results are written to
 ``docs/benchmarks/bench_snr.json`` and ``docs/figures/bench_snr.png`` and the
 table in ``docs/benchmarks.md`` quotes them.
 
-Usage: ``python recipes/bench_snr.py [--sample 200] [--repeats 5]``.
+Run from the repository root with the project environment; pyBSM's own
+environment is made on first use (see ``recipes/README.md``)::
+
+    .venv/bin/python recipes/bench_snr.py [--sample 200] [--repeats 5]
 """
 
 from __future__ import annotations

@@ -1,9 +1,9 @@
 """Build ``atmosphere.nc`` from the MODTRAN 5.2.1 database shipped with pyBSM 0.16.1.
 
-Run from the repository root::
+Run from the repository root with the project environment (see ``recipes/README.md``)::
 
-    /work/devenv/bin/python recipes/build_atmosphere.py            # build + fixture
-    /work/devenv/bin/python recipes/build_atmosphere.py --check    # build twice, compare sha256
+    .venv/bin/python recipes/build_atmosphere.py            # build + fixture
+    .venv/bin/python recipes/build_atmosphere.py --check    # build twice, compare sha256
 
 What it does
 ------------

@@ -1,9 +1,10 @@
 """Write the pyBSM 0.16.1 reference fixture for xbsm's parity tests.
 
-Run in a separate environment that has pyBSM (never a dependency of xbsm)::
+Run from the repository root with the pyBSM environment (never a dependency
+of xbsm; how to make it: ``recipes/README.md``)::
 
-    python -m venv /tmp/pybsm-ref && /tmp/pybsm-ref/bin/pip install pybsm==0.16.1
-    NUMBA_NUM_THREADS=1 /tmp/pybsm-ref/bin/python recipes/pybsm_reference.py
+    NUMBA_NUM_THREADS=1 recipes/_cache/pybsm-venv/bin/python recipes/pybsm_reference.py
+    NUMBA_NUM_THREADS=1 recipes/_cache/pybsm-venv/bin/python recipes/pybsm_reference.py --all
 
 It draws random but reproducible sensors and scenarios covering visible to
 LWIR bands, self-emission, TDI, frame stacks, well-fill limits, sharpening,
@@ -32,10 +33,13 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pybsm
-from pybsm import radiance, utils
-from pybsm.metrics import functional as metrics
-from pybsm.simulation import Scenario, Sensor
+from _pybsm_env import pybsm_required
+
+with pybsm_required():
+    import pybsm
+    from pybsm import radiance, utils
+    from pybsm.metrics import functional as metrics
+    from pybsm.simulation import Scenario, Sensor
 
 HERE = Path(__file__).resolve().parent
 FIXTURES = HERE.parent / "tests" / "fixtures"

@@ -1,8 +1,9 @@
 """pyBSM 0.16.1 ``load_database_atmosphere`` outputs for the "linear" parity test.
 
-Run with the reference environment (pyBSM 0.16.1 installed, NumPy 2)::
+Run from the repository root with the pyBSM environment (pyBSM 0.16.1, NumPy 2;
+how to make it: ``recipes/README.md``)::
 
-    /work/refenv/bin/python recipes/pybsm_reference_atmosphere.py
+    NUMBA_NUM_THREADS=1 recipes/_cache/pybsm-venv/bin/python recipes/pybsm_reference_atmosphere.py
 
 Writes ``tests/fixtures/atmosphere_pybsm_linear.json``: for a handful of off-node
 (altitude, ground range, ihaze) points, the values pyBSM returns at a few wavelength
@@ -18,8 +19,11 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pybsm
-from pybsm.utils import load_database_atmosphere
+from _pybsm_env import pybsm_required
+
+with pybsm_required():
+    import pybsm
+    from pybsm.utils import load_database_atmosphere
 
 OUT = Path(__file__).resolve().parents[1] / "tests" / "fixtures" / "atmosphere_pybsm_linear.json"
 

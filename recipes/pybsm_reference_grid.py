@@ -27,9 +27,10 @@ N = 1601 and writes ``tests/fixtures/pybsm_grid1601.npz`` (one entry per case;
 ``case_index`` points into ``tests/fixtures/pybsm_cases.json``) and
 ``tests/fixtures/pybsm_grid1601.json`` (the case indices and provenance).
 
-Run with the pyBSM environment (about 1.5 min on a 2-core machine)::
+Run from the repository root with the pyBSM environment (about 1.5 min on a
+2-core machine; how to make it: ``recipes/README.md``)::
 
-    NUMBA_NUM_THREADS=1 /work/refenv/bin/python recipes/pybsm_reference_grid.py
+    NUMBA_NUM_THREADS=1 recipes/_cache/pybsm-venv/bin/python recipes/pybsm_reference_grid.py
 """
 
 from __future__ import annotations
@@ -41,10 +42,13 @@ import time
 from pathlib import Path
 
 import numpy as np
-from pybsm import geospatial, noise, radiance, utils
-from pybsm.metrics import functional as metrics
-from pybsm.otf import functional as otf_functional
-from pybsm.simulation import Scenario, Sensor
+from _pybsm_env import pybsm_required
+
+with pybsm_required():
+    from pybsm import geospatial, noise, radiance, utils
+    from pybsm.metrics import functional as metrics
+    from pybsm.otf import functional as otf_functional
+    from pybsm.simulation import Scenario, Sensor
 
 HERE = Path(__file__).resolve().parent
 FIXTURES = HERE.parent / "tests" / "fixtures"

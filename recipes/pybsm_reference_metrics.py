@@ -1,8 +1,9 @@
 """Write pyBSM 0.16.1 reference values for tests/test_metrics.py.
 
-Run with the interpreter that has pyBSM installed (never imported by xbsm):
+Run from the repository root with the pyBSM environment (never imported by
+xbsm; how to make it: ``recipes/README.md``)::
 
-    /work/refenv/bin/python recipes/pybsm_reference_metrics.py
+    NUMBA_NUM_THREADS=1 recipes/_cache/pybsm-venv/bin/python recipes/pybsm_reference_metrics.py
 
 It draws random inputs with a fixed seed, evaluates pyBSM's metric functions
 on them and writes ``tests/fixtures/pybsm_metrics.npz`` (inputs and outputs)
@@ -16,9 +17,12 @@ import pathlib
 import platform
 
 import numpy as np
-import pybsm
-from pybsm.metrics import functional as fm
-from pybsm.otf import functional as fo
+from _pybsm_env import pybsm_required
+
+with pybsm_required():
+    import pybsm
+    from pybsm.metrics import functional as fm
+    from pybsm.otf import functional as fo
 
 OUT = pathlib.Path(__file__).resolve().parents[1] / "tests" / "fixtures"
 SEED = 20240611

@@ -1,8 +1,9 @@
 """Write tests/fixtures/pybsm_otf.npz: pyBSM 0.16.1 OTF values on a small grid of arguments.
 
-Run with the reference environment (pyBSM installed), from the repository root:
+Run from the repository root with the pyBSM environment (how to make it:
+``recipes/README.md``)::
 
-    /work/refenv/bin/python recipes/pybsm_reference_otf.py
+    NUMBA_NUM_THREADS=1 recipes/_cache/pybsm-venv/bin/python recipes/pybsm_reference_otf.py
 
 The file is deterministic (no random numbers) and small (< 200 kB). Keys are
 ``<case>/<field>``; every input needed to repeat the call is stored next to
@@ -16,9 +17,12 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pybsm
-from pybsm.geospatial import altitude_along_slant_path
-from pybsm.otf import functional as otf
+from _pybsm_env import pybsm_required
+
+with pybsm_required():
+    import pybsm
+    from pybsm.geospatial import altitude_along_slant_path
+    from pybsm.otf import functional as otf
 
 OUT = Path(__file__).resolve().parents[1] / "tests" / "fixtures" / "pybsm_otf.npz"
 

@@ -50,9 +50,11 @@ Outputs: ``docs/benchmarks/speed_accuracy.json``,
 ``docs/figures/speed_accuracy_threshold.png`` (error vs samples per
 oscillation). ``docs/speed_accuracy.md`` quotes them.
 
-Usage (about 6 min on a 2-core machine; ``--quick`` about 2 min)::
+Run from the repository root with the project environment; pyBSM's own
+environment is made on first use, or ``$PYBSM_PYTHON`` names one (about 6 min
+on a 2-core machine; ``--quick`` about 2 min; see ``recipes/README.md``)::
 
-    PYBSM_PYTHON=/path/to/pybsm-env/bin/python python recipes/speed_accuracy.py [--quick]
+    .venv/bin/python recipes/speed_accuracy.py [--quick]
 """
 
 from __future__ import annotations
