@@ -10,7 +10,7 @@ import xarray as xr
 from pybsm_cases import datasets, load_cases
 
 import xbsm
-from xbsm.methods import PRESETS, Method
+from xbsm.methods import KNOB_CHOICES, PRESETS, Method
 from xbsm.model import niirs
 
 FIXTURES = Path(__file__).parent / "fixtures"
@@ -27,13 +27,15 @@ def test_preset_is_frozen(name):
         m.frequency_samples = 1601
 
 
-def _other_value(value):
+def _other_value(value, knob):
+    if knob in KNOB_CHOICES:  # another allowed choice
+        return next(c for c in KNOB_CHOICES[knob] if c != value)
     if isinstance(value, bool):
         return not value
     if isinstance(value, int):
         return value + 1
     if isinstance(value, float):
-        return value * 2.0 + 0.5
+        return value * 0.5 + 0.25
     if isinstance(value, str):
         return value + "_changed"
     return PRESETS["accurate"].constants if value is PRESETS["pybsm"].constants else (
@@ -43,7 +45,7 @@ def _other_value(value):
 @pytest.mark.parametrize("knob", Method.knobs())
 def test_each_knob_overrides_alone(knob):
     base = xbsm.method("pybsm")
-    value = _other_value(getattr(base, knob))
+    value = _other_value(getattr(base, knob), knob)
     m = xbsm.method("pybsm", **{knob: value})
     assert getattr(m, knob) == value
     for other in Method.knobs():
@@ -185,3 +187,29 @@ def test_accurate_is_within_1e3_niirs_of_a_16x_finer_reference(system):
     reference = niirs(sensor, scenario, xbsm.method("accurate", **FINE))["niirs"]
     assert bool(np.isfinite(reference).all())
     assert float(abs(got - reference).max()) < 1e-3
+
+
+def _bad_values(knob):
+    """Values no knob of that kind accepts (wrong choice, wrong type, out of range)."""
+    from xbsm.methods import KNOB_INTEGERS, KNOB_REALS
+    if knob in KNOB_CHOICES:
+        return ["bogus", None, 1]
+    if knob in KNOB_INTEGERS:
+        low, high = KNOB_INTEGERS[knob]
+        return [low - 1, high + 1, 2.5, True, "3"]
+    if knob in KNOB_REALS:
+        low, high, _ = KNOB_REALS[knob]
+        return [low - 1.0, high * 2.0, float("nan"), float("inf"), "1", None]
+    return ["", None, 3]  # name, constants
+
+
+@pytest.mark.parametrize("knob", Method.knobs())
+def test_every_knob_rejects_a_bad_value_when_the_method_is_made(knob):
+    for value in _bad_values(knob):
+        with pytest.raises(ValueError, match=f"knob {knob} must be"):
+            xbsm.method("accurate", **{knob: value})
+
+
+def test_misspelt_knob_gets_the_closest_names():
+    with pytest.raises(ValueError, match="did you mean nodes_per_panel"):
+        xbsm.method("accurate", nodes_per_pannel=12)

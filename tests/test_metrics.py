@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from scipy.integrate import trapezoid
 from scipy.special import erf, ndtr, struve
 
+import xbsm
 from xbsm import flags, metrics, quadrature
 
 FIXTURES = pathlib.Path(__file__).parent / "fixtures"
@@ -28,13 +29,15 @@ def slice_da(values, nodes, lead_dim="case"):
 
 
 def accurate_er(otf, cutoff, positions, breakpoints=None, ifov=IFOV, method="accurate"):
-    nodes, w = quadrature.edge_quadrature(method, cutoff=cutoff, ifov=ifov, breakpoints=breakpoints)
+    nodes, w = quadrature.edge_quadrature(cutoff=cutoff, ifov=ifov, breakpoints=breakpoints,
+                                          **xbsm.method(method).edge_quadrature_knobs())
     h = slice_da(otf(nodes.values), nodes.values)
     return metrics.edge_response(h, ifov, positions, w)
 
 
 def rer_of(otf, cutoff, breakpoints=None, method="accurate"):
-    nodes, w = quadrature.edge_quadrature(method, cutoff=cutoff, ifov=IFOV, breakpoints=breakpoints)
+    nodes, w = quadrature.edge_quadrature(cutoff=cutoff, ifov=IFOV, breakpoints=breakpoints,
+                                          **xbsm.method(method).edge_quadrature_knobs())
     h = slice_da(otf(nodes.values), nodes.values)
     return float(metrics.relative_edge_response(h, IFOV, w))
 
@@ -211,7 +214,8 @@ def test_edge_response_parity_with_pybsm(group):
 @pytest.mark.parametrize("kind", ["smooth", "noisy"])
 def test_rer_eho_grd_parity_with_pybsm(kind):
     slices = REF[f"{kind}_slices"]
-    nodes, w = quadrature.edge_quadrature("pybsm", cutoff=float(REF[f"{kind}_cutoff"]), ifov=1.0)
+    nodes, w = quadrature.edge_quadrature(cutoff=float(REF[f"{kind}_cutoff"]), ifov=1.0,
+                                          **xbsm.method("pybsm").edge_quadrature_knobs())
     # exact: pyBSM's step is one IEEE division of the same two doubles
     assert nodes.values[1] == float(REF[f"{kind}_df"])
     h = slice_da(slices, nodes)
@@ -370,7 +374,8 @@ def test_pybsm_rule_fails_for_undersampled_system_accurate_does_not():
     bps = quadrature.detector_breakpoints(IFOV, cutoff)
     out = {}
     for method in ("pybsm", "accurate"):
-        nodes, w = quadrature.edge_quadrature(method, cutoff=cutoff, ifov=IFOV, breakpoints=bps)
+        nodes, w = quadrature.edge_quadrature(cutoff=cutoff, ifov=IFOV, breakpoints=bps,
+                                              **xbsm.method(method).edge_quadrature_knobs())
         out[method] = metrics.edge_terms(slice_da(mtf(nodes.values), nodes.values), IFOV, w)
     # converged (|OTF| as pyBSM uses): the edge has settled by 1 px, EHO 1.00858
     assert float(out["accurate"].eho) == pytest.approx(1.00858, abs=1e-5)
@@ -453,7 +458,8 @@ def test_grd_pybsm_rule_reproduces_numpy_interp(values, snr):
 
 
 def test_sweep_dims_broadcast_and_ifov_sweep():
-    nodes, w = quadrature.edge_quadrature("accurate", cutoff=4 / IFOV, ifov=2 * IFOV)
+    nodes, w = quadrature.edge_quadrature(cutoff=4 / IFOV, ifov=2 * IFOV,
+                                          **xbsm.method("accurate").edge_quadrature_knobs())
     sig = xr.DataArray([0.3, 0.6, 0.9], dims="blur", coords={"blur": [0.3, 0.6, 0.9]})
     h = np.exp(-2 * np.pi**2 * (sig * IFOV) ** 2 * slice_da(nodes.values, nodes.values) ** 2)
     ifov = xr.DataArray([IFOV, 2 * IFOV], dims="pitch", coords={"pitch": [1, 2]})
@@ -471,7 +477,8 @@ def test_sweep_dims_broadcast_and_ifov_sweep():
 
 
 def test_dask_equals_eager_and_stays_lazy():
-    nodes, w = quadrature.edge_quadrature("fast", cutoff=4 / IFOV, ifov=IFOV)
+    nodes, w = quadrature.edge_quadrature(cutoff=4 / IFOV, ifov=IFOV,
+                                          **xbsm.method("fast").edge_quadrature_knobs())
     rng = np.random.default_rng(0)
     s = rng.uniform(0.2, 1.0, 12)
     values = np.exp(-2 * np.pi**2 * (s[:, None] * IFOV) ** 2 * nodes.values**2)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import pathlib
 
 import numpy as np
@@ -10,7 +9,13 @@ import pytest
 import xarray as xr
 from scipy.integrate import trapezoid
 
+import xbsm
 from xbsm import metrics, quadrature
+
+
+def knobs(preset, **overrides):
+    """The edge-quadrature knobs of a method preset (the one source of their values)."""
+    return xbsm.method(preset, **overrides).edge_quadrature_knobs()
 
 FIXTURES = pathlib.Path(__file__).parent / "fixtures"
 IFOV = 1e-5  # [rad]; every test below scales with cutoff * ifov only
@@ -64,7 +69,7 @@ def system_case(q, eps=0.0, jitter=0.0, drift=0.0, poly=False, part="real"):
 
 
 def run_rule(rule, otf, cutoff, bps, positions):
-    nodes, w = quadrature.edge_quadrature(rule, cutoff=cutoff, ifov=IFOV, breakpoints=bps)
+    nodes, w = quadrature.edge_quadrature(cutoff=cutoff, ifov=IFOV, breakpoints=bps, **rule)
     h = xr.DataArray(otf(nodes.values), dims="frequency", coords={"frequency": nodes.values})
     return metrics.edge_response(h, IFOV, positions, w).values
 
@@ -79,7 +84,7 @@ CASES = [
     for part in ("real", "abs")
 ]
 POSITIONS = np.concatenate([[-0.5, 0.5], metrics.EHO_POSITIONS])
-REFERENCE = dataclasses.replace(quadrature.ACCURATE, name="reference", panels_per_oscillation=16)
+REFERENCE = knobs("accurate", name="reference", panels_per_oscillation=16)
 
 
 def max_errors(rule, with_breakpoints=True):
@@ -116,12 +121,13 @@ def test_uniform_trapezoid_weights_equal_numpy_trapezoid():
 
 def test_pybsm_preset_uses_pybsm_grid_step():
     cutoff = 550000.0000000001  # pyBSM case A1's D / lambda_min
-    nodes, w = quadrature.edge_quadrature("pybsm", cutoff=cutoff, ifov=2e-6)
+    nodes, w = quadrature.edge_quadrature(cutoff=cutoff, ifov=2e-6, **knobs("pybsm"))
     assert nodes.sizes["frequency"] == 50
     # df printed by pyBSM for case A1: 11000.0
     assert nodes.values[1] - nodes.values[0] == pytest.approx(11000.0, rel=1e-14)
     assert w.attrs["quadrature_preset"] == "pybsm"
-    nodes_big, _ = quadrature.edge_quadrature("pybsm", cutoff=cutoff, ifov=2e-6, grid_size=1601)
+    nodes_big, _ = quadrature.edge_quadrature(
+        cutoff=cutoff, ifov=2e-6, **knobs("pybsm", frequency_samples=1601))
     assert nodes_big.sizes["frequency"] == 801
 
 
@@ -138,17 +144,17 @@ def test_gauss_legendre_is_exact_for_polynomials_and_avoids_zero():
 
 def test_panel_count_follows_oscillation_count():
     # Q = 0.05: cutoff * ifov = 20, x_max = 3 px -> 60 oscillations -> 60 panels
-    nodes, _ = quadrature.edge_quadrature("accurate", cutoff=20 / IFOV, ifov=IFOV)
-    assert nodes.sizes["frequency"] == 60 * quadrature.ACCURATE.nodes_per_panel
+    nodes, _ = quadrature.edge_quadrature(cutoff=20 / IFOV, ifov=IFOV, **knobs("accurate"))
+    assert nodes.sizes["frequency"] == 60 * xbsm.method("accurate").nodes_per_panel
     # well sampled: min_panels wins
-    nodes, _ = quadrature.edge_quadrature("accurate", cutoff=0.5 / IFOV, ifov=IFOV)
-    assert nodes.sizes["frequency"] == quadrature.ACCURATE.min_panels * 10
+    nodes, _ = quadrature.edge_quadrature(cutoff=0.5 / IFOV, ifov=IFOV, **knobs("accurate"))
+    assert nodes.sizes["frequency"] == xbsm.method("accurate").min_panels * 10
 
 
 def test_breakpoints_become_panel_edges():
     bps = [0.123, 0.777, 5.0]  # the last is beyond the cutoff and ignored
     nodes, w = quadrature.edge_quadrature(
-        "accurate", cutoff=1.0, ifov=0.1, breakpoints=bps, min_panels=2, nodes_per_panel=3
+        cutoff=1.0, ifov=0.1, breakpoints=bps, **knobs("accurate", min_panels=2, nodes_per_panel=3)
     )
     # panels [0,.123], [.123,.5], [.5,.777], [.777,1]
     assert nodes.sizes["frequency"] == 12
@@ -156,10 +162,10 @@ def test_breakpoints_become_panel_edges():
 
 
 def test_knobs_override_one_by_one():
-    a, _ = quadrature.edge_quadrature("fast", cutoff=1.0, ifov=1.0, nodes_per_panel=3)
-    assert a.sizes["frequency"] == quadrature.FAST.min_panels * 3
-    custom = dataclasses.replace(quadrature.ACCURATE, min_panels=2, nodes_per_panel=2)
-    b, _ = quadrature.edge_quadrature(custom, cutoff=1.0, ifov=0.1)
+    a, _ = quadrature.edge_quadrature(cutoff=1.0, ifov=1.0, **knobs("fast", nodes_per_panel=3))
+    assert a.sizes["frequency"] == xbsm.method("fast").min_panels * 3
+    b, _ = quadrature.edge_quadrature(
+        cutoff=1.0, ifov=0.1, **knobs("accurate", min_panels=2, nodes_per_panel=2))
     assert b.sizes["frequency"] == 4
 
 
@@ -168,18 +174,20 @@ def test_knobs_override_one_by_one():
     [
         (dict(cutoff=0.0, ifov=1.0), "cutoff"),
         (dict(cutoff=1.0, ifov=-1.0), "ifov"),
-        (dict(cutoff=1.0, ifov=1.0, nodes_per_panel=0), "nodes_per_panel"),
-        (dict(cutoff=1.0, ifov=1.0, rule="simpson"), "rule"),
+        (dict(cutoff=1.0, ifov=1.0, rule="simpson"), "rule must be one of"),
     ],
 )
-def test_bad_knobs_raise_value_error_naming_the_parameter(kwargs, match):
+def test_bad_arguments_raise_value_error_naming_the_parameter(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        quadrature.edge_quadrature("accurate", **kwargs)
+        quadrature.edge_quadrature(**{**knobs("accurate"), **kwargs})
 
 
-def test_unknown_method_raises():
-    with pytest.raises(ValueError, match="method"):
-        quadrature.edge_quadrature("simpson", cutoff=1.0, ifov=1.0)
+def test_bad_knob_values_are_refused_when_the_method_is_made():
+    # one source of knobs: a bad quadrature knob fails in xbsm.method, naming the knob
+    with pytest.raises(ValueError, match=r"nodes_per_panel must be a whole number in \[1, "):
+        xbsm.method("accurate", nodes_per_panel=0)
+    with pytest.raises(ValueError, match="edge_rule must be one of"):
+        xbsm.method("accurate", edge_rule="simpson")
 
 
 def test_aperture_breakpoints_of_obscured_pupil():
@@ -193,15 +201,15 @@ def test_aperture_breakpoints_of_obscured_pupil():
 def test_accurate_rule_converged_vs_16x_finer_rule():
     # Measured 4.5e-9 (docs/metrics.md) over 256 aperture/detector/jitter/drift cases,
     # Q = 0.05 .. 2, with breakpoints; 1.6e-5 without them.
-    assert max_errors(quadrature.ACCURATE) < 1e-8
+    assert max_errors(knobs("accurate")) < 1e-8
 
 
 def test_fast_rule_error_bound():
     # Documented bound for "fast": |ER error| < 1e-6 with breakpoints (measured 3.5e-7),
     # < 1e-4 without (measured 3.5e-5), at the RER and EHO positions.
-    assert max_errors(quadrature.FAST) < 1e-6
-    assert max_errors(quadrature.FAST, with_breakpoints=False) < 1e-4
+    assert max_errors(knobs("fast")) < 1e-6
+    assert max_errors(knobs("fast"), with_breakpoints=False) < 1e-4
 
 
 def test_accurate_without_breakpoints_still_within_1e_4():
-    assert max_errors(quadrature.ACCURATE, with_breakpoints=False) < 1e-4
+    assert max_errors(knobs("accurate"), with_breakpoints=False) < 1e-4

@@ -11,9 +11,67 @@ overridden one by one::
 from __future__ import annotations
 
 import dataclasses
+import difflib
+import numbers
 from dataclasses import dataclass
+from types import MappingProxyType
 
+from .atmosphere import INTERPOLATIONS
 from .constants import CODATA, PYBSM_CODATA_2014, Constants
+
+#: Allowed values of every text knob.
+KNOB_CHOICES = MappingProxyType({
+    "atmosphere_interpolation": INTERPOLATIONS,
+    "band_edges": ("exact", "interpolated"),
+    "edge_rule": ("uniform_trapezoid", "gauss_legendre"),
+    "edge_otf": ("abs", "real"),
+    "filter_otf": ("pybsm", "dtft"),
+    "turbulence_path_rule": ("trapezoid", "gauss-legendre"),
+    "elevation": ("look-down", "target"),
+})
+#: Allowed range [low, high] of every whole-number knob. The upper limits guard memory:
+#: each bounds an array the knob sizes (frequency nodes, path samples, wavelengths) well
+#: above any converged setting (docs/speed_accuracy.md uses at most 16x "accurate").
+KNOB_INTEGERS = MappingProxyType({
+    "frequency_samples": (3, 100_001),
+    "nodes_per_panel": (1, 200),
+    "min_panels": (1, 10_000),
+    "otf_wavelengths": (0, 10_000),
+    "turbulence_path_samples": (2, 1_000_000),
+})
+#: Allowed range of every real-valued knob: (low, high, low is inclusive).
+KNOB_REALS = MappingProxyType({
+    "panels_per_oscillation": (0.0, 64.0, False),
+    "giqe4_noise_coefficient": (0.0, 1.0, True),
+    "undersampling_threshold": (0.0, 100.0, True),
+})
+
+
+def _check_knob(name, value):
+    """Raise ValueError unless ``value`` is allowed for knob ``name``."""
+    if name in KNOB_CHOICES:
+        if not (isinstance(value, str) and value in KNOB_CHOICES[name]):
+            choices = ", ".join(map(repr, KNOB_CHOICES[name]))
+            raise ValueError(f"method knob {name} must be one of {choices}; got {value!r}")
+    elif name in KNOB_INTEGERS:
+        low, high = KNOB_INTEGERS[name]
+        if (isinstance(value, bool) or not isinstance(value, numbers.Integral)
+                or not low <= value <= high):
+            raise ValueError(
+                f"method knob {name} must be a whole number in [{low}, {high}]; got {value!r}")
+    elif name in KNOB_REALS:
+        low, high, closed = KNOB_REALS[name]
+        real = isinstance(value, numbers.Real) and not isinstance(value, bool)
+        above = real and (value >= low if closed else value > low)
+        if not (real and above and value <= high):
+            bracket = "[" if closed else "("
+            raise ValueError(
+                f"method knob {name} must be a real number in {bracket}{low:g}, {high:g}]; "
+                f"got {value!r}")
+    elif name == "constants" and not isinstance(value, Constants):
+        raise ValueError(f"method knob constants must be a Constants object; got {value!r}")
+    elif name == "name" and not (isinstance(value, str) and value):
+        raise ValueError(f"method knob name must be a non-empty string; got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -69,11 +127,25 @@ class Method:
     Q = 0.02-2 and N = 101-1601 is 0.006; docs/speed_accuracy.md); at N = 101 that is
     Q = lambda F# / p < 0.12."""
 
+    def __post_init__(self):
+        for field in dataclasses.fields(self):
+            _check_knob(field.name, getattr(self, field.name))
+
+    def edge_quadrature_knobs(self) -> dict:
+        """The knobs of :func:`xbsm.quadrature.edge_quadrature`, as plain values."""
+        return dict(rule=self.edge_rule, grid_size=self.frequency_samples,
+                    nodes_per_panel=self.nodes_per_panel,
+                    panels_per_oscillation=self.panels_per_oscillation,
+                    min_panels=self.min_panels, name=self.name)
+
     def replace(self, **knobs) -> Method:
         """A copy with some knobs changed."""
-        unknown = set(knobs) - {f.name for f in dataclasses.fields(self)}
-        if unknown:
-            raise ValueError(f"unknown method knob(s) {sorted(unknown)}; known: {self.knobs()}")
+        known = self.knobs()
+        for name in knobs:
+            if name not in known:
+                close = difflib.get_close_matches(name, known, n=3)
+                hint = f"did you mean {' or '.join(close)}?" if close else f"known: {known}"
+                raise ValueError(f"unknown method knob {name!r}; {hint}")
         return dataclasses.replace(self, **knobs)
 
     @classmethod
@@ -82,7 +154,7 @@ class Method:
         return [f.name for f in dataclasses.fields(cls)]
 
 
-PRESETS: dict[str, Method] = {
+_PRESETS: dict[str, Method] = {
     "pybsm": Method(
         name="pybsm",
         constants=PYBSM_CODATA_2014,
@@ -122,9 +194,11 @@ PRESETS: dict[str, Method] = {
         undersampling_threshold=2.0,
     ),
 }
-PRESETS["fast"] = PRESETS["accurate"].replace(
+_PRESETS["fast"] = _PRESETS["accurate"].replace(
     name="fast", nodes_per_panel=6, min_panels=4, otf_wavelengths=8, turbulence_path_samples=16
 )
+#: The presets by name: the one table of method numbers (read-only).
+PRESETS = MappingProxyType(_PRESETS)
 
 
 def method(preset: str | Method = "accurate", /, **knobs) -> Method:

@@ -370,7 +370,7 @@ def _otf_weights(spectral_weights: xr.DataArray) -> xr.DataArray:
     return xr.where(usable, weights, 1.0)
 
 
-def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate"):
+def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibration=None):
     """Predicted NIIRS by GIQE 3, 4 and 5 with every intermediate (paper Sec. 3).
 
     Parameters
@@ -381,6 +381,10 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate"):
         From :func:`xbsm.scenario`.
     method : str or Method
         "accurate" (default), "fast" or "pybsm", or a :class:`xbsm.methods.Method`.
+    calibration : mapping of int to GiqeCalibration, optional
+        GIQE calibration ranges for the flags, by version, e.g.
+        ``{5: xbsm.metrics.GIQE5_CALIBRATION.replace(snr=(2, 130))}``; versions
+        left out keep :data:`xbsm.metrics.GIQE_CALIBRATIONS`. Changes flags only.
 
     Returns
     -------
@@ -406,13 +410,18 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate"):
     check_kind(sensor, "sensor", "sensor")
     check_kind(scenario, "scenario", "scenario")
     m = resolve_method(method)
-    return _niirs_from_snr(sensor, scenario, m, snr(sensor, scenario, m))
+    from .metrics import giqe_calibrations
+
+    cal = giqe_calibrations(calibration)
+    return _niirs_from_snr(sensor, scenario, m, snr(sensor, scenario, m), calibration=cal)
 
 
-def _niirs_from_snr(s: xr.Dataset, sc: xr.Dataset, m: Method, r: xr.Dataset) -> xr.Dataset:
+def _niirs_from_snr(s: xr.Dataset, sc: xr.Dataset, m: Method, r: xr.Dataset,
+                    calibration=None) -> xr.Dataset:
     """The NIIRS chain after the radiometry, for a :func:`snr` result ``r`` of (s, sc, m)."""
     from . import geometry, metrics
-    from .otf.system import cutoff_wavelength, edge_nodes, samples_per_oscillation, system_otf
+    from .otf.system import cutoff_wavelength, system_otf
+    from .quadrature import edge_nodes, samples_per_oscillation
 
     slant = geometry.slant_range(sc["ground_range"], sc["altitude"])
     if m.elevation == "look-down":
@@ -427,7 +436,7 @@ def _niirs_from_snr(s: xr.Dataset, sc: xr.Dataset, m: Method, r: xr.Dataset) -> 
     weights = r["spectral_weights"]
     qe, transmission = _band_curves(s, weights["wavelength"])
     cutoff = s["aperture_diameter"] / cutoff_wavelength(weights["wavelength"], qe, transmission)
-    nodes, quad_weights = edge_nodes(cutoff, ifov_x, ifov_y, m)
+    nodes, quad_weights = edge_nodes(cutoff, ifov_x, ifov_y, **m.edge_quadrature_knobs())
     otf = system_otf(s, sc, nodes, spectral_weights=_otf_weights(weights),
                      integration_time=r["integration_time"], slant_range=slant, method=m)
 
@@ -451,12 +460,18 @@ def _niirs_from_snr(s: xr.Dataset, sc: xr.Dataset, m: Method, r: xr.Dataset) -> 
     gain = noise.noise_gain(s["filter_kernel"])
     stacked = r["snr"]
 
-    g3 = metrics.giqe3(rer=rer, gsd=gsd, eho=eho, snr=stacked, noise_gain=gain)
+    cal = metrics.giqe_calibrations(calibration)
+    # GIQE 5's Q = lambda N / p at the band centre, per orientation (flags only)
+    q = metrics.sampling_q(0.5 * (s["wavelength_min"] + s["wavelength_max"]),
+                           s["aperture_diameter"], ifov)
+    g3 = metrics.giqe3(rer=rer, gsd=gsd, eho=eho, snr=stacked, noise_gain=gain,
+                       elevation=elevation, calibration=cal[3])
     g4 = metrics.giqe4(rer=rer, gsd=gsd, eho=eho, snr=stacked, elevation=elevation,
-                       noise_gain=gain, noise_coefficient=m.giqe4_noise_coefficient)
+                       noise_gain=gain, noise_coefficient=m.giqe4_noise_coefficient,
+                       calibration=cal[4])
     g5 = metrics.giqe5(rer_x=unfiltered["rer"].sel(orientation="x", drop=True),
                        rer_y=unfiltered["rer"].sel(orientation="y", drop=True),
-                       gsd=gsd_x, snr=stacked, elevation=elevation)
+                       gsd=gsd_x, snr=stacked, elevation=elevation, calibration=cal[5], q=q)
     giqe = xr.DataArray(list(GIQE_VERSIONS), dims="giqe", name="giqe",
                         attrs={"long_name": "GIQE version"})
     niirs_ = xr.concat([g3["niirs"], g4["niirs"], g5["niirs"]], dim=giqe, coords="minimal",

@@ -18,117 +18,38 @@ edge [px] and :math:`f_c` the optics cutoff :math:`D/\lambda_{min}`
   the abscissa used in :math:`1/f` and :math:`\sin(2\pi f\theta x)`. It equals
   ``frequency`` for every rule except ``"pybsm"``, which offsets it by 1e-6.
 
-:func:`xbsm.metrics.edge_response` consumes the pair. Three named presets
-exist (:data:`PYBSM`, :data:`ACCURATE`, :data:`FAST`); each is a frozen
-:class:`EdgeQuadrature` whose knobs can be overridden one at a time with
-:func:`dataclasses.replace` or as keywords of :func:`edge_quadrature`.
-Measured errors of each preset are in ``docs/metrics.md``.
+:func:`xbsm.metrics.edge_response` consumes the pair. The rules take plain
+knobs; their values for the ``"pybsm"``, ``"accurate"`` and ``"fast"`` methods live
+in one place, :data:`xbsm.methods.PRESETS`
+(``xbsm.method(name).edge_quadrature_knobs()``). Measured errors of each preset
+are in ``docs/metrics.md``.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
 
 __all__ = [
-    "ACCURATE",
-    "FAST",
-    "PYBSM",
-    "PRESETS",
-    "EdgeQuadrature",
+    "EDGE_RULES",
     "aperture_breakpoints",
     "detector_breakpoints",
+    "edge_nodes",
     "edge_quadrature",
     "gauss_legendre_rule",
     "pybsm_slice_count",
+    "samples_per_oscillation",
     "uniform_trapezoid_rule",
 ]
 
-
-@dataclass(frozen=True)
-class EdgeQuadrature:
-    r"""Knobs of a frequency quadrature rule for the edge response.
-
-    Attributes
-    ----------
-    rule : str
-        ``"uniform_trapezoid"`` (pyBSM's rule) or ``"gauss_legendre"``
-        (composite Gauss-Legendre).
-    name : str
-        Preset name, recorded in the ``weights`` attrs.
-    grid_size : int
-        Uniform rule only: size N of the pyBSM 2-D grid ``linspace(-1, 1, N)``
-        from which the 1-D slice is taken; the slice holds
-        :func:`pybsm_slice_count` (N) samples.
-    frequency_offset : float
-        Uniform rule only: offset added to the abscissa in ``1/f`` and
-        ``sin`` (pyBSM uses 1e-6). [cycles/rad]
-    nodes_per_panel : int
-        Gauss-Legendre only: nodes per panel.
-    panels_per_oscillation : float
-        Gauss-Legendre only: panels per period of
-        :math:`\sin(2\pi f\theta x_{max})` over :math:`[0, f_c]`.
-    min_panels : int
-        Gauss-Legendre only: lower bound on the number of uniform panels.
-    max_position : float
-        Largest distance from the edge the rule must resolve (3 px covers the
-        edge height overshoot). [px]
-    """
-
-    rule: str = "gauss_legendre"
-    name: str = "custom"
-    grid_size: int = 101
-    frequency_offset: float = 1e-6
-    nodes_per_panel: int = 8
-    panels_per_oscillation: float = 1.0
-    min_panels: int = 8
-    max_position: float = 3.0
-
-    def __post_init__(self):
-        if self.rule not in ("uniform_trapezoid", "gauss_legendre"):
-            raise ValueError(
-                f"rule must be 'uniform_trapezoid' or 'gauss_legendre', got {self.rule!r}"
-            )
-        if self.grid_size < 3:
-            raise ValueError(f"grid_size must be >= 3, got {self.grid_size}")
-        if self.nodes_per_panel < 1:
-            raise ValueError(f"nodes_per_panel must be >= 1, got {self.nodes_per_panel}")
-        if not self.panels_per_oscillation > 0:
-            raise ValueError(
-                f"panels_per_oscillation must be > 0, got {self.panels_per_oscillation}"
-            )
-        if self.min_panels < 1:
-            raise ValueError(f"min_panels must be >= 1, got {self.min_panels}")
-        if not self.max_position > 0:
-            raise ValueError(f"max_position must be > 0 [px], got {self.max_position}")
-
-
-PYBSM = EdgeQuadrature(rule="uniform_trapezoid", name="pybsm")
-"""pyBSM 0.16.1: trapezoid on the 50 slice samples of its 101-point grid."""
-
-ACCURATE = EdgeQuadrature(
-    rule="gauss_legendre",
-    name="accurate",
-    nodes_per_panel=10,
-    panels_per_oscillation=1.0,
-    min_panels=8,
-)
-"""Converged composite Gauss-Legendre (error < 1e-9 on smooth OTFs)."""
-
-FAST = EdgeQuadrature(
-    rule="gauss_legendre",
-    name="fast",
-    nodes_per_panel=6,
-    panels_per_oscillation=1.0,
-    min_panels=4,
-)
-"""Cheap composite Gauss-Legendre; measured error bound in docs/metrics.md."""
-
-PRESETS = {"pybsm": PYBSM, "accurate": ACCURATE, "fast": FAST}
+#: Edge-response quadrature rules: pyBSM's trapezoid on its grid slice, or composite
+#: Gauss-Legendre.
+EDGE_RULES = ("uniform_trapezoid", "gauss_legendre")
+#: Largest distance from the edge the rules resolve: 3 px covers the edge height overshoot,
+#: which looks at 1 to 3 px from the edge. [px]
+MAX_POSITION = 3.0
 
 
 def pybsm_slice_count(grid_size: int) -> int:
@@ -335,25 +256,37 @@ def _panel_edges(cutoff, n_panels, breakpoints):
     return edges
 
 
-def edge_quadrature(method="accurate", *, cutoff, ifov, breakpoints=None, **knobs):
-    r"""Frequency nodes and weights of a named edge-response quadrature rule.
+def edge_quadrature(*, cutoff, ifov, rule, grid_size, nodes_per_panel, panels_per_oscillation,
+                    min_panels, breakpoints=None, frequency_offset=1e-6, name="custom"):
+    r"""Frequency nodes and weights of an edge-response quadrature rule.
 
     Parameters
     ----------
-    method : {"accurate", "fast", "pybsm"} or EdgeQuadrature
-        Preset name or a knob object.
     cutoff : float
         Upper integration limit, normally the optics cutoff
         :math:`D/\lambda_{min}`; the OTF must vanish beyond it. [cycles/rad]
     ifov : float or array_like or xr.DataArray
         Detector IFOV (pitch / focal length); the largest value sets the
         oscillation count. [rad]
+    rule : {"uniform_trapezoid", "gauss_legendre"}
+        pyBSM's trapezoid on its grid slice, or composite Gauss-Legendre.
+    grid_size : int
+        Uniform rule: size N of pyBSM's grid ``linspace(-1, 1, N)`` whose
+        slice holds :func:`pybsm_slice_count` (N) samples. [1]
+    nodes_per_panel : int
+        Gauss-Legendre: nodes per panel. [1]
+    panels_per_oscillation : float
+        Gauss-Legendre: panels per period of :math:`\sin(2\pi f\theta x_{max})`. [1]
+    min_panels : int
+        Gauss-Legendre: fewest uniform panels over :math:`[0, f_c]`. [1]
     breakpoints : array_like, optional
-        Frequencies where the OTF has a kink (Gauss-Legendre rules only),
-        e.g. from :func:`aperture_breakpoints` and
-        :func:`detector_breakpoints`. [cycles/rad]
-    **knobs
-        Overrides of :class:`EdgeQuadrature` fields.
+        Frequencies where the OTF has a kink (Gauss-Legendre only), e.g. from
+        :func:`aperture_breakpoints` and :func:`detector_breakpoints`. [cycles/rad]
+    frequency_offset : float, optional
+        Uniform rule: offset added to the abscissa in ``1/f`` and ``sin``
+        (pyBSM uses 1e-6). [cycles/rad]
+    name : str, optional
+        Method name recorded in the attrs.
 
     Returns
     -------
@@ -365,19 +298,18 @@ def edge_quadrature(method="accurate", *, cutoff, ifov, breakpoints=None, **knob
     The integrand :math:`H(f)\sin(2\pi f\theta x)/f` completes
     :math:`n_{osc} = f_c\,\theta\,x_{max}` periods over :math:`[0, f_c]`
     (about 60 for Q = 0.05 at :math:`x_{max}` = 3 px). The Gauss-Legendre
-    rules use :math:`\max(n_{min}, \lceil p\,n_{osc}\rceil)` uniform panels,
+    rule uses :math:`\max(n_{min}, \lceil p\,n_{osc}\rceil)` uniform panels,
     split further at the breakpoints. The pyBSM rule uses
     :math:`\Delta f = 2f_c/(N-1)` (computed as pyBSM does) and
     :func:`pybsm_slice_count` samples, whatever the oscillation count.
+
+    Examples
+    --------
+    The knobs of a method preset: ``edge_quadrature(cutoff=..., ifov=...,
+    **xbsm.method("accurate").edge_quadrature_knobs())``.
     """
-    if isinstance(method, EdgeQuadrature):
-        q = method
-    elif method in PRESETS:
-        q = PRESETS[method]
-    else:
-        raise ValueError(f"method must be one of {sorted(PRESETS)} or an EdgeQuadrature")
-    if knobs:
-        q = dataclasses.replace(q, **knobs)
+    if rule not in EDGE_RULES:
+        raise ValueError(f"rule must be one of {', '.join(map(repr, EDGE_RULES))}; got {rule!r}")
     cutoff = float(cutoff)
     if not (np.isfinite(cutoff) and cutoff > 0):
         raise ValueError(f"cutoff must be finite and > 0 [cycles/rad], got {cutoff}")
@@ -385,19 +317,100 @@ def edge_quadrature(method="accurate", *, cutoff, ifov, breakpoints=None, **knob
     if not (np.isfinite(ifov_max) and ifov_max > 0):
         raise ValueError(f"ifov must be finite and > 0 [rad], got {ifov}")
 
-    if q.rule == "uniform_trapezoid":
-        grid = np.linspace(-1.0, 1.0, q.grid_size) * cutoff
+    if rule == "uniform_trapezoid":
+        grid = np.linspace(-1.0, 1.0, grid_size) * cutoff
         step = grid[1] - grid[0]
         nodes, weights = uniform_trapezoid_rule(
-            pybsm_slice_count(q.grid_size), step, q.frequency_offset
+            pybsm_slice_count(grid_size), step, frequency_offset
         )
     else:
-        n_osc = cutoff * ifov_max * q.max_position
-        n_panels = max(q.min_panels, math.ceil(q.panels_per_oscillation * n_osc))
+        n_osc = cutoff * ifov_max * MAX_POSITION
+        n_panels = max(min_panels, math.ceil(panels_per_oscillation * n_osc))
         nodes, weights = gauss_legendre_rule(
-            _panel_edges(cutoff, n_panels, breakpoints), q.nodes_per_panel
+            _panel_edges(cutoff, n_panels, breakpoints), nodes_per_panel
         )
-    meta = {"quadrature_preset": q.name, "cutoff_frequency": cutoff}
+    meta = {"quadrature_preset": name, "cutoff_frequency": cutoff}
     nodes.attrs.update(meta)
     weights.attrs.update(meta)
     return nodes, weights
+
+
+def _sensor_grid(*arrays):
+    """Broadcast sensor quantities to numpy, keeping their dims and coords."""
+    b = xr.broadcast(*[xr.DataArray(a) for a in arrays])
+    return b, b[0].dims, {d: b[0][d] for d in b[0].dims if d in b[0].coords}
+
+
+def edge_nodes(cutoff, ifov_x, ifov_y, **knobs):
+    """Frequency nodes and quadrature weights for the edge response of every sensor.
+
+    Parameters
+    ----------
+    cutoff : float or xr.DataArray
+        Optics cutoff D / lambda_min, possibly over sensor dims. [cycles/rad]
+    ifov_x, ifov_y : float or xr.DataArray
+        Detector pitch over focal length. [rad]
+    **knobs
+        The rule's knobs, as for :func:`edge_quadrature`
+        (``Method.edge_quadrature_knobs()``).
+
+    Returns
+    -------
+    nodes, weights : xr.DataArray
+        On dims (``frequency``, sensor dims...); ``weights`` carries the
+        ``sine_frequency`` coordinate of :mod:`xbsm.quadrature`. Sensors that
+        need fewer nodes than the largest are padded with zero weights.
+        [cycles/rad]
+    """
+    (c, ix, iy), dims, coords = _sensor_grid(cutoff, ifov_x, ifov_y)
+    per_sensor = {}
+    for index in np.ndindex(c.shape):
+        key = (float(c.values[index]), float(max(ix.values[index], iy.values[index])))
+        if key not in per_sensor:
+            nodes, weights = edge_quadrature(cutoff=key[0], ifov=key[1], **knobs)
+            per_sensor[key] = (nodes.values, weights.values, weights["sine_frequency"].values)
+    size = max(v[0].size for v in per_sensor.values())
+    shape = (size,) + c.shape
+    nodes = np.empty(shape)
+    weights = np.zeros(shape)
+    sine = np.empty(shape)
+    for index in np.ndindex(c.shape):
+        key = (float(c.values[index]), float(max(ix.values[index], iy.values[index])))
+        n, w, s = per_sensor[key]
+        pad = (slice(None),) + index
+        nodes[pad] = key[0]
+        sine[pad] = key[0]
+        nodes[(slice(0, n.size),) + index] = n
+        weights[(slice(0, n.size),) + index] = w
+        sine[(slice(0, n.size),) + index] = s
+    all_dims = ("frequency",) + tuple(dims)
+    attrs = {"units": "cycles/rad"}
+    nodes_da = xr.DataArray(nodes, dims=all_dims, coords=coords,
+                            attrs={**attrs, "long_name": "edge-response frequency nodes"})
+    weights_da = xr.DataArray(weights, dims=all_dims, coords=coords,
+                              attrs={**attrs, "long_name": "edge-response quadrature weights"})
+    weights_da = weights_da.assign_coords(
+        sine_frequency=(all_dims, sine, {**attrs, "long_name": "abscissa of 1/f and the sine"})
+    )
+    return nodes_da, weights_da
+
+
+def samples_per_oscillation(nodes, cutoff, ifov_x, ifov_y):
+    """Frequency samples per period of the edge-response integrand at 3 px.
+
+    Parameters
+    ----------
+    nodes : xr.DataArray
+        Frequency nodes on ``frequency``. [cycles/rad]
+    cutoff : float or xr.DataArray
+        [cycles/rad]
+    ifov_x, ifov_y : float or xr.DataArray
+        [rad]
+
+    Returns
+    -------
+    xr.DataArray
+        [1]
+    """
+    oscillations = cutoff * np.maximum(ifov_x, ifov_y) * MAX_POSITION
+    return (nodes.sizes["frequency"] / oscillations).assign_attrs(units="1")
