@@ -84,7 +84,8 @@ def test_giqe5_b7_nga_test_case():
     assert float(out.niirs) == pytest.approx(5.015165370148328, rel=1e-13)
     assert float(out.gsd_w) == pytest.approx(0.52832, rel=1e-15)
     assert float(out.rer) == pytest.approx(0.35, rel=1e-15)
-    assert int(out.flags) == 0
+    # the report's own example is outside its validation data only in SNR (4.1-26.7)
+    assert int(out.flags) == flags.flag("snr_out_of_range")
     assert out.niirs.attrs["units"] == "1"
 
 
@@ -94,9 +95,10 @@ def test_giqe5_b8():
     assert float(out.niirs) == pytest.approx(3.341217068150002, rel=1e-13)
     assert float(out.gsd_w) == pytest.approx(1.0230310532914486, rel=1e-13)
     assert float(out.rer) == 1.0
-    # 20 rad is outside [30 deg, 90 deg]; GSD 1 m = 39 in is inside 3-80 in
+    # 20 rad is outside GIQE 5's 8.5-90 deg; GSD_W 1.023 m = 40.3 in is outside
+    # its validation data's 3.3-34.4 in (NGA GIQE 5 report, 2015)
     assert bool(flags.has_flag(out.flags, "elevation_out_of_range"))
-    assert not bool(flags.has_flag(out.flags, "gsd_out_of_range"))
+    assert bool(flags.has_flag(out.flags, "gsd_out_of_range"))
 
 
 def test_giqe3_b9():
@@ -546,3 +548,134 @@ def test_edge_response_of_valid_systems_is_finite_and_odd(q, sigma, x):
     assert np.isfinite(er.values).all()
     # a symmetric PSF gives ER(x) + ER(-x) = 1
     assert float(er.sum()) == pytest.approx(1.0, abs=1e-12)
+
+
+# ------------------------------------------------ per-version GIQE calibration
+# Limits: NGA, "General Image Quality Equation (GIQE) Version 5.0" (Harrington et
+# al., 16 Sep 2015), as summarised with sources in docs/flags.md.
+
+
+def test_giqe5_at_8p9_deg_elevation_is_not_flagged_for_elevation():
+    # GIQE 5 report: validation data span elevation 8.9-87.3 deg (conclusions
+    # 8.5-90); every other input inside the report's validation spans
+    out = metrics.giqe5(rer_x=0.4, rer_y=0.4, gsd=10 * metrics.INCH, snr=20,
+                        elevation=np.deg2rad(8.9), q=1.5)
+    assert not bool(flags.has_flag(out.flags, "elevation_out_of_range"))
+    assert int(out.flags) == 0
+
+
+def test_giqe4_at_28_deg_elevation_is_not_flagged_for_elevation():
+    # GIQE 5 report's summary of GIQE 4: fitted on images at elevation 25-90 deg
+    # (xbsm flagged below 30 deg before)
+    out = metrics.giqe4(rer=0.5, gsd=0.3, eho=1.0, snr=50, elevation=np.deg2rad(28.0))
+    assert not bool(flags.has_flag(out.flags, "elevation_out_of_range"))
+    assert int(out.flags) == 0
+
+
+def test_giqe4_at_20_deg_elevation_is_flagged():
+    # below GIQE 4's 25-90 deg fitting range (GIQE 5 report's summary of GIQE 4)
+    out = metrics.giqe4(rer=0.5, gsd=0.3, eho=1.0, snr=50, elevation=np.deg2rad(20.0))
+    assert int(out.flags) == flags.flag("elevation_out_of_range")
+    assert np.isfinite(float(out.niirs))
+    assert bool(flags.is_outside_calibration(out.flags))
+    assert not bool(flags.is_invalid(out.flags))
+
+
+def test_giqe5_at_snr_4_is_flagged():
+    # GIQE 5 report: validation SNR 4.1-26.7, and SNR below 5 "should be used
+    # with caution"; SNR 4 is outside the calibration, but not a wrong number
+    out = metrics.giqe5(rer_x=0.4, rer_y=0.4, gsd=10 * metrics.INCH, snr=4.0,
+                        elevation=np.pi / 2, q=1.5)
+    assert int(out.flags) == flags.flag("snr_out_of_range")
+    assert np.isfinite(float(out.niirs))
+    assert bool(flags.is_outside_calibration(out.flags))
+    assert not bool(flags.is_invalid(out.flags))
+
+
+def test_giqe5_at_q_2p5_is_flagged():
+    # GIQE 5 report: the equation assumes 1 <= Q = lambda N / p <= 2, and Q > 2
+    # is "a pure extrapolation"
+    kwargs = dict(rer_x=0.4, rer_y=0.4, gsd=10 * metrics.INCH, snr=20, elevation=np.pi / 2)
+    out = metrics.giqe5(**kwargs, q=2.5)
+    assert int(out.flags) == flags.flag("q_out_of_range")
+    # one orientation outside is enough
+    q = xr.DataArray([1.5, 2.5], dims="orientation", coords={"orientation": ["x", "y"]})
+    assert int(metrics.giqe5(**kwargs, q=q).flags) == flags.flag("q_out_of_range")
+    assert int(metrics.giqe5(**kwargs, q=2.0).flags) == 0
+    # Q only flags: the prediction is the same with or without it
+    assert float(out.niirs) == float(metrics.giqe5(**kwargs).niirs)
+
+
+def test_sampling_q_is_lambda_f_number_over_pitch():
+    # hand calculation: 0.7 um x (4 m / 0.275 m) / 8 um = 1.2727...
+    q = metrics.sampling_q(0.7e-6, 0.275, 8e-6 / 4.0)
+    assert float(q) == pytest.approx(0.7e-6 * (4.0 / 0.275) / 8e-6, rel=1e-15)
+    assert q.attrs["units"] == "1"
+
+
+def test_each_giqe_version_has_its_own_calibration():
+    cal = metrics.GIQE_CALIBRATIONS
+    assert cal[3] is metrics.GIQE3_CALIBRATION and cal[5] is metrics.GIQE5_CALIBRATION
+    # GIQE 4: 25-90 deg; GIQE 5: 8.5-90 deg, SNR 4.1-26.7, Q 1-2 (NGA 2015)
+    assert cal[4].elevation == pytest.approx((np.deg2rad(25), np.pi / 2))
+    assert cal[5].elevation == pytest.approx((np.deg2rad(8.5), np.pi / 2))
+    assert cal[5].snr == (4.1, 26.7) and cal[5].rer == (0.31, 0.54) and cal[5].q == (1.0, 2.0)
+    assert cal[5].gsd == pytest.approx((3.3 * 0.0254, 34.4 * 0.0254))
+    assert cal[5].gsd_ground_plane == pytest.approx((3.3 * 0.0254, 55.3 * 0.0254))
+    assert cal[3].elevation is None and cal[4].q is None
+
+
+def test_calibration_table_is_immutable():
+    with pytest.raises(TypeError):
+        metrics.GIQE_CALIBRATIONS[5] = metrics.GIQE4_CALIBRATION
+    with pytest.raises(AttributeError):  # dataclasses.FrozenInstanceError
+        metrics.GIQE5_CALIBRATION.snr = (2.0, 130.0)
+
+
+def test_calibration_override_changes_flags_not_niirs():
+    kwargs = dict(rer_x=0.35, rer_y=0.35, gsd=20.8 * 0.0254, snr=50, elevation=np.pi / 2)
+    default = metrics.giqe5(**kwargs)
+    wide = metrics.giqe5(**kwargs, calibration=metrics.GIQE5_CALIBRATION.replace(snr=(4.1, 60)))
+    assert int(default.flags) == flags.flag("snr_out_of_range")
+    assert int(wide.flags) == 0
+    assert float(wide.niirs) == float(default.niirs)
+    # a GIQE 3 elevation range is tested once set (the default has none)
+    g3 = metrics.GIQE3_CALIBRATION.replace(elevation=(np.deg2rad(25), np.pi / 2))
+    low = dict(rer=0.5, gsd=0.3, eho=1.0, snr=50, elevation=np.deg2rad(20.0))
+    assert int(metrics.giqe3(**low).flags) == 0
+    assert int(metrics.giqe3(**low, calibration=g3).flags) == flags.flag("elevation_out_of_range")
+
+
+@pytest.mark.parametrize("change, match", [
+    (dict(elevation=(25.0, 90.0)), "elevation must be a \\(low, high\\) pair in radians"),
+    (dict(snr=(5.0, 4.0)), "snr must be None or a \\(low, high\\) pair"),
+    (dict(rer=0.3), "rer must be None or a \\(low, high\\) pair"),
+    (dict(gsd=(np.nan, 1.0)), "gsd must be None"),
+    (dict(q=(-1.0, 2.0)), "q must be None .* low >= 0"),
+    (dict(snr=(1, 2, 3)), "snr must be None"),
+    (dict(nirs=(0, 10)), "unknown GiqeCalibration field"),
+])
+def test_invalid_calibration_is_rejected(change, match):
+    with pytest.raises(ValueError, match=match):
+        metrics.GIQE5_CALIBRATION.replace(**change)
+
+
+def test_invalid_calibration_argument_is_rejected():
+    with pytest.raises(ValueError, match="calibration must be an xbsm.metrics.GiqeCalibration"):
+        metrics.giqe5(rer_x=0.4, rer_y=0.4, gsd=0.3, snr=20, elevation=1.0,
+                      calibration={"snr": (2, 130)})
+    with pytest.raises(ValueError, match="version"):
+        metrics.giqe_calibrations({6: metrics.GIQE5_CALIBRATION})
+    with pytest.raises(ValueError, match="GiqeCalibration"):
+        metrics.giqe_calibrations({5: (4.1, 26.7)})
+    with pytest.raises(ValueError, match="GIQE 5 only"):
+        metrics.giqe_calibrations({4: metrics.GIQE4_CALIBRATION.replace(q=(1, 2))})
+
+
+def test_every_flag_is_in_exactly_one_group():
+    groups = flags.INVALID + flags.CALIBRATION + flags.NOTICE
+    assert sorted(groups) == sorted(flags.FLAGS)
+    assert flags.INVALID_MASK & flags.CALIBRATION_MASK == 0
+    fl = xr.DataArray(np.int32([0, 4, 8, 512, 8 | 512]))
+    assert flags.is_invalid(fl).values.tolist() == [False, False, False, True, True]
+    assert flags.is_outside_calibration(fl).values.tolist() == [False, False, True, False, True]

@@ -286,3 +286,42 @@ def test_system_otf_on_a_2d_grid_gives_a_centred_psf():
     assert float(psf.sum()) == pytest.approx(1.0, rel=1e-12)
     peak = np.unravel_index(int(np.argmax(psf.values)), psf.shape)
     assert peak == (32, 32)  # the symmetric PSF peaks at the centre sample
+
+
+# ------------------------------------------------ GIQE calibration per version
+
+
+def test_niirs_q_flag_is_set_for_giqe5_only():
+    # NGA GIQE 5 report (2015): GIQE 5 assumes 1 <= Q <= 2. Olson NIR: band
+    # centre 0.7 um, D 0.275 m, 8 um pitch; f = 7.857 m gives Q = 2.5 (f = 4 m: 1.27)
+    sc = olson_scenario(ground_range=0.0, visibility=23.0)
+    focal = xr.DataArray([4.0, 2.5 * 0.275 * 8e-6 / 0.7e-6], dims="focal_length")
+    n = xbsm.niirs(olson_sensor("nir", focal_length=focal), sc)
+    q_flag = has_flag(n.flags, "q_out_of_range")
+    assert q_flag.sel(giqe=5).values.tolist() == [False, True]
+    assert not bool(q_flag.sel(giqe=[3, 4]).any())
+
+
+def test_niirs_calibration_override_per_version():
+    sc = olson_scenario(ground_range=0.0, visibility=23.0)
+    s = olson_sensor("nir")
+    default = xbsm.niirs(s, sc)
+    # Olson NIR at nadir: SNR 84.5 is above GIQE 5's validation span 4.1-26.7
+    assert bool(has_flag(default.flags.sel(giqe=5), "snr_out_of_range"))
+    wide = xbsm.metrics.GIQE5_CALIBRATION.replace(snr=(4.1, 100.0))
+    n = xbsm.niirs(s, sc, calibration={5: wide})
+    assert not bool(has_flag(n.flags.sel(giqe=5), "snr_out_of_range"))
+    # the other versions and every NIIRS value are unchanged
+    xr.testing.assert_identical(n.flags.sel(giqe=[3, 4]), default.flags.sel(giqe=[3, 4]))
+    xr.testing.assert_identical(n.niirs, default.niirs)
+
+
+@pytest.mark.parametrize("calibration, match", [
+    ({7: xbsm.metrics.GIQE5_CALIBRATION}, "GIQE version"),
+    ({5: {"snr": (2, 130)}}, "GiqeCalibration"),
+    (xbsm.metrics.GIQE5_CALIBRATION, "mapping from GIQE version"),
+])
+def test_niirs_rejects_an_invalid_calibration(calibration, match):
+    sc = olson_scenario(ground_range=0.0, visibility=23.0)
+    with pytest.raises(ValueError, match=match):
+        xbsm.niirs(olson_sensor("nir"), sc, calibration=calibration)

@@ -44,7 +44,10 @@ __all__ = [
     "INTERPOLATIONS",
     "VARIABLES",
     "atmosphere_at",
+    "band_atmosphere",
+    "band_wavelengths",
     "database_path",
+    "database_wavelengths",
     "open_atmosphere",
 ]
 
@@ -443,3 +446,86 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation="log-line
         source="MODTRAN 5.2.1 database of pyBSM 0.16.1 (xbsm atmosphere.nc)",
         interpolation=interpolation,
     )
+
+
+RELATIVE_EDGE_TOLERANCE = 1e-9
+"""Band edges closer than this (relative) to a database wavelength are on it."""
+
+
+def band_wavelengths(wavelength_min: float, wavelength_max: float, band_edges: str,
+                     path=None):
+    """Wavelengths at which a band is sampled, and the database bounds to load.
+
+    Parameters
+    ----------
+    wavelength_min, wavelength_max : float
+        Band edges. [m]
+    band_edges : str
+        "exact" (pyBSM: database samples w with min <= w <= max by float
+        comparison) or "interpolated" (the band's own edges plus every database
+        sample strictly inside).
+    path : str or os.PathLike, optional
+        Database file; see :func:`database_path`.
+
+    Returns
+    -------
+    tuple
+        (wavelengths to sample as np.ndarray or None for "exact",
+        (low, high) database bounds to load).
+    """
+    if band_edges == "exact":
+        return None, (wavelength_min, wavelength_max)
+    if band_edges != "interpolated":
+        raise ValueError(f"band_edges must be 'exact' or 'interpolated'; got {band_edges!r}")
+    grid = database_wavelengths(path)
+    tol = RELATIVE_EDGE_TOLERANCE
+    inside = grid[(grid > wavelength_min * (1 + tol)) & (grid < wavelength_max * (1 - tol))]
+    lo_index = max(np.searchsorted(grid, wavelength_min * (1 + tol), side="right") - 1, 0)
+    hi_index = min(np.searchsorted(grid, wavelength_max * (1 - tol)), grid.size - 1)
+    lo_near = np.isclose(grid[lo_index], wavelength_min, rtol=tol, atol=0)
+    hi_near = np.isclose(grid[hi_index], wavelength_max, rtol=tol, atol=0)
+    lo = grid[lo_index] if lo_near else wavelength_min
+    hi = grid[hi_index] if hi_near else wavelength_max
+    samples = np.concatenate([[lo], inside, [hi]])
+    return samples, (grid[lo_index], grid[hi_index])
+
+
+def band_atmosphere(altitude, ground_range, visibility, wavelength_min, wavelength_max, *,
+                    interpolation, band_edges, path=None) -> xr.Dataset:
+    """Atmosphere over a sensor's band for every scenario.
+
+    Parameters
+    ----------
+    altitude, ground_range, visibility : float or xr.DataArray
+        As for :func:`atmosphere_at`. [m, m, km]
+    wavelength_min, wavelength_max : float
+        Band edges. [m]
+    interpolation : str
+        As for :func:`atmosphere_at`.
+    band_edges : {"exact", "interpolated"}
+        As for :func:`band_wavelengths`.
+    path : str or os.PathLike, optional
+        Database file; see :func:`database_path`.
+
+    Returns
+    -------
+    xr.Dataset
+        Atmosphere components over ``wavelength`` and the scenario dims, plus ``flags``.
+    """
+    samples, bounds = band_wavelengths(float(wavelength_min), float(wavelength_max),
+                                       band_edges, path)
+    atm = atmosphere_at(altitude, ground_range, visibility, interpolation=interpolation,
+                        wavelength_bounds=bounds, path=path)
+    if atm.sizes["wavelength"] < 2:
+        raise ValueError(
+            "the band [wavelength_min, wavelength_max] must span at least two database "
+            f"wavelengths (10 nm apart); got {bounds}"
+        )
+    if samples is not None and (
+        samples.size != atm.sizes["wavelength"]
+        or not np.array_equal(samples, atm["wavelength"].values)
+    ):
+        band_flags = atm["flags"]
+        atm = atm.drop_vars("flags").interp(wavelength=samples)
+        atm["flags"] = band_flags
+    return atm

@@ -4,6 +4,20 @@ Results carry an integer variable ``flags`` with CF ``flag_masks`` and
 ``flag_meanings`` attributes. A set bit never replaces a value by a silent
 NaN: where a value is NaN, a bit says why; where a value is finite but
 outside a method's range of validity, a bit says which range.
+
+Every bit belongs to one of three groups, so that one test answers the
+question a user has:
+
+- :data:`INVALID`: the number is NaN or may be wrong (no atmosphere data, SNR
+  at or below zero, a frequency grid too coarse for the edge integral).
+  Test with :func:`is_invalid`.
+- :data:`CALIBRATION`: the number is computed correctly, but a GIQE is used
+  outside the range of images it was fitted or validated on (per version:
+  :data:`xbsm.metrics.GIQE_CALIBRATIONS`), or the NIIRS is off the rating
+  scale. Test with :func:`is_outside_calibration`.
+- :data:`NOTICE`: something the user should know that makes the number
+  neither wrong nor extrapolated (a shortened integration time, an
+  atmosphere interpolated across the database's altitude gap).
 """
 
 from __future__ import annotations
@@ -44,7 +58,34 @@ FLAGS: dict[str, tuple[int, str]] = {
         512,
         "contrast SNR at or below zero: GIQE noise terms are undefined; NIIRS is NaN",
     ),
+    "q_out_of_range": (
+        1024,
+        "GIQE 5 only: sampling ratio Q = lambda N / p (lambda the band centre) outside "
+        "the 1-2 the GIQE 5 report assumes",
+    ),
 }
+
+INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive")
+"""Bits saying a number is NaN or may be wrong."""
+
+CALIBRATION = (
+    "snr_out_of_range",
+    "rer_out_of_range",
+    "gsd_out_of_range",
+    "elevation_out_of_range",
+    "q_out_of_range",
+    "niirs_out_of_scale",
+)
+"""Bits saying a number is outside a GIQE's calibration (or off the NIIRS scale)."""
+
+NOTICE = ("atmosphere_sparse", "well_fill_limited")
+"""Bits that are neither: information about how a number was obtained."""
+
+INVALID_MASK = sum(FLAGS[name][0] for name in INVALID)
+"""OR of the :data:`INVALID` bits (641)."""
+
+CALIBRATION_MASK = sum(FLAGS[name][0] for name in CALIBRATION)
+"""OR of the :data:`CALIBRATION` bits (1400)."""
 
 
 def flag(name: str) -> int:
@@ -60,6 +101,8 @@ def flag_attrs(long_name: str = "validity flags") -> dict:
         "units": "1",
         "flag_masks": np.array([FLAGS[n][0] for n in names], dtype=np.int32),
         "flag_meanings": " ".join(names),
+        "invalid_mask": np.int32(INVALID_MASK),
+        "calibration_mask": np.int32(CALIBRATION_MASK),
     }
 
 
@@ -82,3 +125,13 @@ def empty_flags(like: xr.DataArray | None = None) -> xr.DataArray:
 def has_flag(flags: xr.DataArray, name: str) -> xr.DataArray:
     """Boolean DataArray: where the bit ``name`` is set."""
     return (flags & np.int32(flag(name))) != 0
+
+
+def is_invalid(flags: xr.DataArray) -> xr.DataArray:
+    """Boolean DataArray: where any :data:`INVALID` bit is set (NaN or possibly wrong)."""
+    return (flags & np.int32(INVALID_MASK)) != 0
+
+
+def is_outside_calibration(flags: xr.DataArray) -> xr.DataArray:
+    """Boolean DataArray: where any :data:`CALIBRATION` bit is set (the GIQE is extrapolated)."""
+    return (flags & np.int32(CALIBRATION_MASK)) != 0

@@ -19,7 +19,10 @@ RER = 1 exactly with the OTF, 0.867 with its modulus). To reproduce pyBSM, pass
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 import xarray as xr
@@ -31,6 +34,7 @@ __all__ = [
     "GIQE3_CALIBRATION",
     "GIQE4_CALIBRATION",
     "GIQE5_CALIBRATION",
+    "GIQE_CALIBRATIONS",
     "INCH",
     "GiqeCalibration",
     "edge_height_overshoot",
@@ -40,9 +44,11 @@ __all__ = [
     "giqe4",
     "giqe5",
     "giqe5_rer",
+    "giqe_calibrations",
     "giqe_flags",
     "ground_resolved_distance",
     "relative_edge_response",
+    "sampling_q",
 ]
 
 INCH = 0.0254
@@ -454,71 +460,230 @@ def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first
 
 @dataclass(frozen=True)
 class GiqeCalibration:
-    """Ranges of the image attributes over which a GIQE was fitted.
+    """Ranges of the image attributes over which one GIQE version was fitted or validated.
+
+    Every range is a ``(low, high)`` pair, inclusive, or ``None`` (not tested).
+    A value outside its range, or NaN, sets the matching bit of
+    :data:`xbsm.flags.CALIBRATION`. A range is tested only where the GIQE
+    function is given the quantity (:func:`xbsm.niirs` gives them all).
 
     Attributes
     ----------
-    snr : tuple of float
+    snr : tuple of float or None
         Contrast SNR range. [1]
-    rer : tuple of float
-        RER range. [1]
-    gsd : tuple of float
-        GSD range (the GSD the equation uses: image-plane for GIQE 3,
-        ground-plane for GIQE 4, elevation-weighted for GIQE 5). [m]
-    elevation : tuple of float
-        Elevation-angle range. [rad]
-    niirs : tuple of float
-        Rating-scale range. [1]
+    rer : tuple of float or None
+        RER range (the RER the equation uses: the geometric mean for GIQE 3
+        and 4, the weighted RER of :func:`giqe5_rer` for GIQE 5). [1]
+    gsd : tuple of float or None
+        GSD range (the GSD the equation uses: ``gsd`` for GIQE 3, ground-plane
+        ``gsd_gp`` for GIQE 4, elevation-weighted ``gsd_w`` for GIQE 5). [m]
+    elevation : tuple of float or None
+        Elevation-angle range, within [0, pi/2]. [rad]
+    niirs : tuple of float or None
+        Range of the prediction. [1]
     source : str
-        Where the numbers come from.
+        Where the numbers come from (a summary; docs/flags.md has each limit).
+    gsd_ground_plane : tuple of float or None
+        Ground-plane GSD range, GSD / sqrt(sin(elevation)) (GIQE 5 only:
+        GIQE 4's ``gsd`` already is ground-plane). [m]
+    q : tuple of float or None
+        Range of the sampling ratio Q = lambda N / p (:func:`sampling_q`;
+        GIQE 5 only). [1]
+
+    Notes
+    -----
+    Instances are immutable; derive a variant with :meth:`replace`, e.g.
+    ``GIQE5_CALIBRATION.replace(snr=(4.1, np.inf))``. Invalid ranges raise
+    a ``ValueError`` naming the field.
     """
 
-    snr: tuple
-    rer: tuple
-    gsd: tuple
-    elevation: tuple
-    niirs: tuple = (0.0, 10.0)
+    snr: tuple | None
+    rer: tuple | None
+    gsd: tuple | None
+    elevation: tuple | None
+    niirs: tuple | None = (0.0, 10.0)
     source: str = ""
+    gsd_ground_plane: tuple | None = None
+    q: tuple | None = None
+
+    def __post_init__(self):
+        for name in _RANGE_FIELDS:
+            object.__setattr__(self, name, _check_range(name, getattr(self, name)))
+        if not isinstance(self.source, str):
+            raise ValueError(f"source must be a str; got {type(self.source).__name__}")
+
+    def replace(self, **changes) -> GiqeCalibration:
+        """A copy with some ranges changed (validated like the constructor)."""
+        unknown = sorted(set(changes) - set(_RANGE_FIELDS) - {"source"})
+        if unknown:
+            raise ValueError(
+                f"unknown GiqeCalibration field(s) {unknown}; fields are "
+                f"{', '.join(_RANGE_FIELDS)}, source"
+            )
+        return dataclasses.replace(self, **changes)
 
 
-# Leachtenauer et al., Appl. Opt. 36(32), 8322 (1997), report the ranges of the
-# image attributes in the GIQE 4 development set as GSD 3-80 in, RER 0.2-1.3,
-# overshoot H 0.9-1.9, noise gain G 1-19, SNR 2-130 (as widely quoted, e.g. by
-# Fiete, "Modeling the Imaging Chain of Digital Cameras", 2010). The search tool
-# available while writing this could not retrieve the primary table, so these
-# are recalled values, marked as such in docs/metrics.md. No elevation range is
-# published there; 30 deg is our conservative choice (obliquity beyond that
-# stretches GSD by more than sqrt(2) along one axis).
+_RANGE_FIELDS = ("snr", "rer", "gsd", "elevation", "niirs", "gsd_ground_plane", "q")
+_RANGE_UNITS = {"snr": "[1]", "rer": "[1]", "gsd": "[m]", "elevation": "[rad]",
+                "niirs": "[1]", "gsd_ground_plane": "[m]", "q": "[1]"}
+
+
+def _check_range(name, value):
+    """Validate one calibration range; return it as a pair of floats (or None)."""
+    if value is None:
+        return None
+    form = (f"{name} must be None or a (low, high) pair of numbers {_RANGE_UNITS[name]} "
+            f"with low <= high")
+    try:
+        lo, hi = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{form}; got {value!r}") from None
+    if np.isnan(lo) or np.isnan(hi) or lo > hi:
+        raise ValueError(f"{form}; got {value!r}")
+    if name == "elevation" and not (0.0 <= lo and hi <= np.pi / 2 + 1e-12):
+        raise ValueError(
+            f"elevation must be a (low, high) pair in radians within [0, pi/2], e.g. "
+            f"(np.deg2rad(25), np.pi / 2); got {value!r}"
+        )
+    if name in ("snr", "rer", "gsd", "gsd_ground_plane", "q") and lo < 0:
+        raise ValueError(f"{form} and low >= 0; got {value!r}")
+    return (lo, hi)
+
+
+# Each limit below has its source on the line before it. "Unverified" means
+# the number could not be traced to a retrievable primary source; docs/flags.md
+# says so too.
+#
+# GIQE 4 (Leachtenauer et al., Appl. Opt. 36(32), 8322, 1997).
 GIQE4_CALIBRATION = GiqeCalibration(
+    # SNR 2-130, RER 0.2-1.3, GSD 3-80 in: the GIQE 4 development ranges as
+    # widely quoted (e.g. Fiete 2010). UNVERIFIED: only the abstract of the
+    # 1997 paper was retrievable.
     snr=(2.0, 130.0),
     rer=(0.2, 1.3),
     gsd=(3 * INCH, 80 * INCH),
-    elevation=(np.deg2rad(30.0), np.pi / 2),
-    source="Leachtenauer et al. 1997 (recalled; elevation: xbsm conservative choice)",
+    # 25-90 deg: NGA, "General Image Quality Equation (GIQE) Version 5.0"
+    # (Harrington et al., 16 Sep 2015), its summary of GIQE 4: fitted on images
+    # at elevations 25-90 deg.
+    elevation=(np.deg2rad(25.0), np.pi / 2),
+    # 0-10: the NIIRS rating scale as xbsm words it (not a fitted range).
+    niirs=(0.0, 10.0),
+    source="SNR/RER/GSD: Leachtenauer et al. 1997 as quoted (unverified); "
+    "elevation: NGA GIQE 5 report 2015 (GIQE 4 fitted at 25-90 deg)",
 )
 
-# GIQE 3 (IBSM Eq. 3-56) predates GIQE 4 and was fitted on similar imagery; no
-# separate range was found, so GIQE 4's is used.
+# GIQE 3 (IBSM Eq. 3-56). No published GIQE 3 range was retrievable.
 GIQE3_CALIBRATION = GiqeCalibration(
+    # GIQE 4's SNR, RER and GSD ranges reused. UNVERIFIED for GIQE 3.
     snr=GIQE4_CALIBRATION.snr,
     rer=GIQE4_CALIBRATION.rer,
     gsd=GIQE4_CALIBRATION.gsd,
-    elevation=GIQE4_CALIBRATION.elevation,
-    source="GIQE 4 ranges reused (no published GIQE 3 range found)",
+    # Not tested: GIQE 3 has no elevation term and no published elevation range
+    # was found (set one with .replace(elevation=...) if wanted).
+    elevation=None,
+    niirs=(0.0, 10.0),
+    source="GIQE 4 SNR/RER/GSD ranges reused (unverified: no published GIQE 3 range "
+    "found); elevation not tested",
 )
 
-# NGA GIQE 5 (2015) does not tabulate a calibration range in a form the search
-# tool could retrieve. Its validation set was rated below SNR 5 with a larger
-# standard error (its Fig. 6-7), and its RER term -2 (log10 RER)^4 is a fit,
-# not a law, so the GIQE 4 development ranges are used as the conservative
-# default.
+# GIQE 5: NGA, "General Image Quality Equation (GIQE) Version 5.0", Harrington,
+# Blanchard, Salacain, Smith, Amanik, 16 Sep 2015 (public release; a copy is in
+# the Kitware/pybsm repository, docs/GIQE-5_for_Public_Release.pdf).
 GIQE5_CALIBRATION = GiqeCalibration(
-    snr=GIQE4_CALIBRATION.snr,
-    rer=GIQE4_CALIBRATION.rer,
-    gsd=GIQE4_CALIBRATION.gsd,
-    elevation=GIQE4_CALIBRATION.elevation,
-    source="GIQE 4 development ranges used as a conservative default for GIQE 5",
+    # SNR 4.1-26.7: span of the report's validation data (it adds that SNR
+    # below 5 "should be used with caution").
+    snr=(4.1, 26.7),
+    # RER 0.31-0.54: span of the validation data (RER as the equation uses it).
+    rer=(0.31, 0.54),
+    # GSD_W 3.3-34.4 in: span of the validation data (elevation-weighted GSD).
+    gsd=(3.3 * INCH, 34.4 * INCH),
+    # 8.5-90 deg: the report's conclusions (its validation data span 8.9-87.3).
+    elevation=(np.deg2rad(8.5), np.pi / 2),
+    # 0-10: the NIIRS rating scale as xbsm words it (not a fitted range).
+    niirs=(0.0, 10.0),
+    source="NGA GIQE 5 report (Harrington et al. 2015): validation-data spans, "
+    "elevation from its conclusions, Q from its sampling assumption",
+    # Ground-plane GSD 3.3-55.3 in: span of the validation data.
+    gsd_ground_plane=(3.3 * INCH, 55.3 * INCH),
+    # Q 1-2: the report assumes 1 <= Q <= 2; Q > 2 is "a pure extrapolation".
+    q=(1.0, 2.0),
 )
+
+GIQE_CALIBRATIONS = MappingProxyType(
+    {3: GIQE3_CALIBRATION, 4: GIQE4_CALIBRATION, 5: GIQE5_CALIBRATION}
+)
+"""The default calibration of each GIQE version, by version (read-only)."""
+
+
+def giqe_calibrations(calibration=None):
+    """Complete and validate a per-version calibration table.
+
+    Parameters
+    ----------
+    calibration : mapping of int to GiqeCalibration, optional
+        Calibrations for some of the GIQE versions 3, 4 and 5; the versions
+        left out keep :data:`GIQE_CALIBRATIONS`.
+
+    Returns
+    -------
+    types.MappingProxyType
+        A read-only ``{3: ..., 4: ..., 5: ...}``.
+    """
+    if calibration is None:
+        return GIQE_CALIBRATIONS
+    form = ("calibration must be a mapping from GIQE version (3, 4 or 5) to "
+            "xbsm.metrics.GiqeCalibration, e.g. {5: GIQE5_CALIBRATION.replace(snr=(2, 130))}")
+    if not isinstance(calibration, Mapping):
+        raise ValueError(f"{form}; got {type(calibration).__name__}")
+    out = dict(GIQE_CALIBRATIONS)
+    for version, cal in calibration.items():
+        if version not in GIQE_CALIBRATIONS:
+            raise ValueError(f"{form}; got version {version!r}")
+        if not isinstance(cal, GiqeCalibration):
+            raise ValueError(f"{form}; got {type(cal).__name__} for version {version}")
+        if version != 5 and (cal.q is not None or cal.gsd_ground_plane is not None):
+            raise ValueError(
+                f"calibration[{version}]: q and gsd_ground_plane apply to GIQE 5 only; "
+                f"they must be None for GIQE {version}"
+            )
+        out[version] = cal
+    return MappingProxyType(out)
+
+
+def _check_calibration(calibration):
+    if not isinstance(calibration, GiqeCalibration):
+        raise ValueError(
+            "calibration must be an xbsm.metrics.GiqeCalibration (e.g. "
+            f"GIQE5_CALIBRATION.replace(...)); got {type(calibration).__name__}"
+        )
+    return calibration
+
+
+def sampling_q(wavelength, aperture_diameter, ifov):
+    r"""Sampling ratio Q of an optics and detector: wavelength x f-number / pixel pitch.
+
+    Parameters
+    ----------
+    wavelength : float or xr.DataArray
+        Wavelength (for a band, the GIQE 5 flag uses the band centre). [m]
+    aperture_diameter : float or xr.DataArray
+        Entrance-pupil diameter. [m]
+    ifov : float or xr.DataArray
+        Instantaneous field of view of one pixel, pitch / focal length. [rad]
+
+    Returns
+    -------
+    xr.DataArray
+        Q. [1]
+
+    Notes
+    -----
+    .. math:: Q = \frac{\lambda N}{p} = \frac{\lambda}{D\,\mathrm{IFOV}}
+
+    NGA GIQE 5 report (2015), which assumes 1 <= Q <= 2.
+    """
+    q = _da(wavelength) / (_da(aperture_diameter) * _da(ifov))
+    return _attrs(q, "1", "sampling ratio Q = lambda N / p")
 
 
 def _outside(value, lo_hi):
@@ -527,8 +692,9 @@ def _outside(value, lo_hi):
     return ~((v >= lo) & (v <= hi))
 
 
-def giqe_flags(*, snr, rer, gsd, elevation=None, niirs=None, calibration=GIQE5_CALIBRATION):
-    """Flag GIQE inputs and predictions outside the calibration ranges.
+def giqe_flags(*, snr, rer, gsd, elevation=None, niirs=None, calibration=GIQE4_CALIBRATION,
+               gsd_ground_plane=None, q=None):
+    """Flag GIQE inputs and predictions outside a calibration.
 
     Parameters
     ----------
@@ -543,26 +709,43 @@ def giqe_flags(*, snr, rer, gsd, elevation=None, niirs=None, calibration=GIQE5_C
     niirs : float or xr.DataArray, optional
         The prediction. [1]
     calibration : GiqeCalibration
-        Ranges to test against.
+        Ranges to test against (default: GIQE 4's).
+    gsd_ground_plane : float or xr.DataArray, optional
+        Ground-plane GSD. [m]
+    q : float or xr.DataArray, optional
+        Sampling ratio Q. With an ``orientation`` dimension, a cell is flagged
+        where any orientation is outside. [1]
 
     Returns
     -------
     xr.DataArray
         int32 bits from :mod:`xbsm.flags`: ``snr_out_of_range``,
-        ``rer_out_of_range``, ``gsd_out_of_range``, ``elevation_out_of_range``,
-        ``niirs_out_of_scale``, ``snr_nonpositive``. NaN inputs count as out
-        of range.
+        ``rer_out_of_range``, ``gsd_out_of_range`` (``gsd`` or
+        ``gsd_ground_plane``), ``elevation_out_of_range``,
+        ``q_out_of_range``, ``niirs_out_of_scale`` (all in
+        :data:`xbsm.flags.CALIBRATION`) and ``snr_nonpositive`` (in
+        :data:`xbsm.flags.INVALID`). NaN inputs count as out of range. A
+        range that is ``None`` in ``calibration``, or whose quantity is not
+        given, is not tested.
     """
-    conds = {
-        "snr_out_of_range": _outside(snr, calibration.snr),
-        "rer_out_of_range": _outside(rer, calibration.rer),
-        "gsd_out_of_range": _outside(gsd, calibration.gsd),
-        "snr_nonpositive": _da(snr) <= 0,
-    }
-    if elevation is not None:
-        conds["elevation_out_of_range"] = _outside(elevation, calibration.elevation)
-    if niirs is not None:
-        conds["niirs_out_of_scale"] = _outside(niirs, calibration.niirs)
+    cal = _check_calibration(calibration)
+    conds = {"snr_nonpositive": _da(snr) <= 0}
+    tests = (
+        ("snr_out_of_range", snr, cal.snr),
+        ("rer_out_of_range", rer, cal.rer),
+        ("gsd_out_of_range", gsd, cal.gsd),
+        ("gsd_out_of_range", gsd_ground_plane, cal.gsd_ground_plane),
+        ("elevation_out_of_range", elevation, cal.elevation),
+        ("q_out_of_range", q, cal.q),
+        ("niirs_out_of_scale", niirs, cal.niirs),
+    )
+    for name, value, lo_hi in tests:
+        if value is None or lo_hi is None:
+            continue
+        cond = _outside(value, lo_hi)
+        if name == "q_out_of_range" and "orientation" in cond.dims:
+            cond = cond.any("orientation")
+        conds[name] = conds[name] | cond if name in conds else cond
     out = _flags.empty_flags(xr.broadcast(*conds.values())[0])
     for name, cond in conds.items():
         out = _flags.set_flag(out, name, cond)
@@ -573,7 +756,8 @@ def _da(x):
     return x if isinstance(x, xr.DataArray) else xr.DataArray(x)
 
 
-def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION):
+def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
+          elevation=None):
     r"""NIIRS from the General Image Quality Equation version 3.
 
     Parameters
@@ -589,7 +773,10 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION):
     noise_gain : float or xr.DataArray, optional
         Noise gain G of the sharpening kernel (1 without sharpening). [1]
     calibration : GiqeCalibration, optional
-        Ranges used for the flags.
+        Ranges used for the flags (default :data:`GIQE3_CALIBRATION`).
+    elevation : float or xr.DataArray, optional
+        Elevation angle, used only for the flags (GIQE 3 has no elevation
+        term; the default calibration does not test it). [rad]
 
     Returns
     -------
@@ -605,6 +792,7 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION):
 
         NIIRS = 11.81 + 3.32\log_{10}\frac{RER}{GSD} - 1.48\,EHO - \frac{G}{SNR}
     """
+    _check_calibration(calibration)
     rer, gsd, eho, snr, noise_gain = map(_da, (rer, gsd, eho, snr, noise_gain))
     with np.errstate(divide="ignore", invalid="ignore"):
         # log10(RER) - log10(GSD) rather than log10(RER / GSD): no underflow for tiny RER
@@ -613,7 +801,8 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION):
         )
     niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & np.isfinite(niirs))
     niirs = _attrs(niirs, "1", "NIIRS (GIQE 3)", references="IBSM Eq. 3-56")
-    fl = giqe_flags(snr=snr, rer=rer, gsd=gsd, niirs=niirs, calibration=calibration)
+    fl = giqe_flags(snr=snr, rer=rer, gsd=gsd, elevation=elevation, niirs=niirs,
+                    calibration=calibration)
     return xr.Dataset({"niirs": niirs, "flags": fl})
 
 
@@ -648,7 +837,8 @@ def giqe4(
         Coefficient of G/SNR: 0.344 in Leachtenauer et al. (1997); pyBSM
         0.16.1 uses 0.334. [1]
     calibration : GiqeCalibration, optional
-        Ranges used for the flags (tested on ``gsd_gp``).
+        Ranges used for the flags, GSD tested on ``gsd_gp`` (default
+        :data:`GIQE4_CALIBRATION`).
 
     Returns
     -------
@@ -670,6 +860,7 @@ def giqe4(
     with (a, b) = (3.32, 1.559) for RER >= 0.9 and (3.16, 2.817) otherwise
     (a 0.11 NIIRS step at RER = 0.9 is part of the published fit).
     """
+    _check_calibration(calibration)
     rer, gsd, eho, snr, elevation, noise_gain = map(
         _da, (rer, gsd, eho, snr, elevation, noise_gain)
     )
@@ -722,7 +913,7 @@ def giqe5_rer(rer_x, rer_y):
     return _attrs(out, "1", "GIQE 5 weighted relative edge response")
 
 
-def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION):
+def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q=None):
     r"""NIIRS from the NGA General Image Quality Equation version 5.
 
     Parameters
@@ -736,7 +927,13 @@ def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION):
     elevation : float or xr.DataArray
         Elevation angle of the sensor seen from the target. [rad]
     calibration : GiqeCalibration, optional
-        Ranges used for the flags (tested on ``gsd_w`` and ``rer``).
+        Ranges used for the flags, tested on ``rer``, ``gsd_w`` and the
+        ground-plane GSD / sqrt(sin(elevation)) (default
+        :data:`GIQE5_CALIBRATION`).
+    q : float or xr.DataArray, optional
+        Sampling ratio Q = lambda N / p (:func:`sampling_q`), used only for
+        the ``q_out_of_range`` flag; not tested when omitted. With an
+        ``orientation`` dimension, flagged where any orientation is outside. [1]
 
     Returns
     -------
@@ -756,6 +953,7 @@ def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION):
                 + 3.32\,(1 - e^{-1.9/SNR})\log_{10}RER
                 - 2\,(\log_{10}RER)^4 - 1.8/SNR
     """
+    _check_calibration(calibration)
     gsd, snr, elevation = map(_da, (gsd, snr, elevation))
     rer = giqe5_rer(rer_x, rer_y)
     sin_el = np.sin(elevation)
@@ -774,7 +972,10 @@ def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION):
     niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & (sin_el > 0) & np.isfinite(niirs))
     niirs = _attrs(niirs, "1", "NIIRS (GIQE 5)", references="NGA GIQE 5, 2015")
     gsd_w = _attrs(gsd_w, "m", "elevation-weighted GSD")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gsd_gp = (gsd / (sin_el**0.5)).where(sin_el > 0)
     fl = giqe_flags(
-        snr=snr, rer=rer, gsd=gsd_w, elevation=elevation, niirs=niirs, calibration=calibration
+        snr=snr, rer=rer, gsd=gsd_w, elevation=elevation, niirs=niirs, calibration=calibration,
+        gsd_ground_plane=gsd_gp, q=q,
     )
     return xr.Dataset({"niirs": niirs, "gsd_w": gsd_w, "rer": rer, "flags": fl})

@@ -11,124 +11,14 @@ import xarray as xr
 
 from . import flags as fl
 from . import noise, radiometry
-from .atmosphere import atmosphere_at, database_wavelengths
+from .atmosphere import band_atmosphere
 from .methods import Method
 from .methods import method as resolve_method
 from .params import check_kind
 
-RELATIVE_EDGE_TOLERANCE = 1e-9
-"""Band edges closer than this (relative) to a database wavelength are on it."""
-
-
-def band_wavelengths(wavelength_min: float, wavelength_max: float, band_edges: str):
-    """Wavelengths at which a band is sampled, and the database bounds to load.
-
-    Parameters
-    ----------
-    wavelength_min, wavelength_max : float
-        Band edges. [m]
-    band_edges : str
-        "exact" (pyBSM: database samples w with min <= w <= max by float
-        comparison) or "interpolated" (the band's own edges plus every database
-        sample strictly inside).
-
-    Returns
-    -------
-    tuple
-        (wavelengths to sample as np.ndarray or None for "exact",
-        (low, high) database bounds to load).
-    """
-    if band_edges == "exact":
-        return None, (wavelength_min, wavelength_max)
-    if band_edges != "interpolated":
-        raise ValueError(f"band_edges must be 'exact' or 'interpolated'; got {band_edges!r}")
-    grid = database_wavelengths()
-    tol = RELATIVE_EDGE_TOLERANCE
-    inside = grid[(grid > wavelength_min * (1 + tol)) & (grid < wavelength_max * (1 - tol))]
-    lo_index = max(np.searchsorted(grid, wavelength_min * (1 + tol), side="right") - 1, 0)
-    hi_index = min(np.searchsorted(grid, wavelength_max * (1 - tol)), grid.size - 1)
-    lo_near = np.isclose(grid[lo_index], wavelength_min, rtol=tol, atol=0)
-    hi_near = np.isclose(grid[hi_index], wavelength_max, rtol=tol, atol=0)
-    lo = grid[lo_index] if lo_near else wavelength_min
-    hi = grid[hi_index] if hi_near else wavelength_max
-    samples = np.concatenate([[lo], inside, [hi]])
-    return samples, (grid[lo_index], grid[hi_index])
-
-
-def band_atmosphere(sensor: xr.Dataset, scenario: xr.Dataset, method: Method) -> xr.Dataset:
-    """Atmosphere over the sensor's band for every scenario.
-
-    Parameters
-    ----------
-    sensor, scenario : xr.Dataset
-        From :func:`xbsm.sensor` and :func:`xbsm.scenario`.
-    method : Method
-        Uses the ``atmosphere_interpolation`` and ``band_edges`` knobs.
-
-    Returns
-    -------
-    xr.Dataset
-        Atmosphere components over ``wavelength`` and the scenario dims, plus ``flags``.
-    """
-    samples, bounds = band_wavelengths(
-        float(sensor["wavelength_min"]), float(sensor["wavelength_max"]), method.band_edges
-    )
-    atm = atmosphere_at(
-        scenario["altitude"],
-        scenario["ground_range"],
-        scenario["visibility"],
-        interpolation=method.atmosphere_interpolation,
-        wavelength_bounds=bounds,
-    )
-    if atm.sizes["wavelength"] < 2:
-        raise ValueError(
-            "the band [wavelength_min, wavelength_max] must span at least two database "
-            f"wavelengths (10 nm apart); got {bounds}"
-        )
-    if samples is not None and (
-        samples.size != atm.sizes["wavelength"]
-        or not np.array_equal(samples, atm["wavelength"].values)
-    ):
-        band_flags = atm["flags"]
-        atm = atm.drop_vars("flags").interp(wavelength=samples)
-        atm["flags"] = band_flags
-    return atm
-
 
 def _drop_scalar_coords(ds: xr.Dataset) -> xr.Dataset:
     return ds.drop_vars([c for c in ds.coords if ds[c].ndim == 0 and c not in ds.dims])
-
-
-def _focal_plane_terms(s: xr.Dataset, wavelength: xr.DataArray, k):
-    """Optics throughput, QE and sensor-made irradiance on the band (paper Eq. 2).
-
-    Returns (optics transmission incl. cold filter and obscuration [1], quantum
-    efficiency [1], self-emission plus stray irradiance [W m-2 m-1]).
-    """
-    diameter, focal = s["aperture_diameter"], s["focal_length"]
-    optics = (
-        s["cold_filter_transmission"]
-        * (1.0 - s["obscuration_ratio"] ** 2)
-        * radiometry.resample_spectral(s["optics_transmission"], wavelength, "optics_transmission")
-    )
-    qe = radiometry.resample_spectral(s["quantum_efficiency"], wavelength, "quantum_efficiency")
-    self_emission = (
-        radiometry.cold_shield_self_emission(
-            wavelength, s["cold_shield_temperature"], diameter, focal, k
-        )
-        + radiometry.optics_self_emission(
-            wavelength, s["optics_temperature"], s["optics_emissivity"],
-            s["cold_filter_transmission"], diameter, focal, k,
-        )
-        + radiometry.cold_stop_self_emission(
-            wavelength, s["cold_filter_temperature"], s["cold_filter_emissivity"],
-            diameter, focal, k,
-        )
-    )
-    other_irradiance = self_emission + radiometry.resample_spectral(
-        s["stray_irradiance"], wavelength, "stray_irradiance"
-    )
-    return optics, qe, other_irradiance
 
 
 def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets="giqe"):
@@ -165,113 +55,35 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
     if targets not in ("giqe", "scenario"):
         raise ValueError(f"targets must be 'giqe' or 'scenario'; got {targets!r}")
     m = resolve_method(method)
-    s, sc, k = sensor, scenario, m.constants
-
-    atm = band_atmosphere(s, sc, m)
-    wavelength = atm["wavelength"]
-    if targets == "giqe":
-        emissive = radiometry.is_emissive_band(float(s["wavelength_min"]))
-        target_radiance = radiometry.giqe_radiance(atm, radiometry.GIQE_TARGET, emissive, k)
-        background_radiance = radiometry.giqe_radiance(
-            atm, radiometry.GIQE_BACKGROUND, emissive, k
-        )
-    else:
-        target_radiance = radiometry.total_radiance(
-            atm, sc["target_reflectance"], sc["target_temperature"], k
-        )
-        background_radiance = radiometry.total_radiance(
-            atm, sc["background_reflectance"], sc["background_temperature"], k
-        )
-
-    optics, qe, other_irradiance = _focal_plane_terms(s, wavelength, k)
-    diameter, focal = s["aperture_diameter"], s["focal_length"]
-
-    def detected(irradiance):
-        return radiometry.photon_detection_rate(
-            irradiance, qe, s["detector_width_x"], s["detector_width_y"], k
-        )
-
-    target_irradiance = optics * radiometry.focal_plane_irradiance(
-        target_radiance, diameter, focal
-    ) + other_irradiance
-    background_irradiance = optics * radiometry.focal_plane_irradiance(
-        background_radiance, diameter, focal
-    ) + other_irradiance
-    target_spectral_rate = detected(target_irradiance)
-    target_rate = radiometry.band_integral(target_spectral_rate) + s["dark_current"]
-    background_rate = radiometry.band_integral(detected(background_irradiance)) + s["dark_current"]
-
-    stages = s["tdi_stages"]
-    full_target = target_rate * s["integration_time"] * stages
-    full_background = background_rate * s["integration_time"] * stages
-    scale = radiometry.well_fill_scale(
-        np.maximum(full_target, full_background), s["max_well"], s["max_well_fill"]
-    )
-    n_target = scale * full_target
-    n_background = scale * full_background
-    t_int = scale * s["integration_time"]
-    brighter = np.maximum(n_target, n_background)
-    contrast = n_target - n_background
-
-    exposure = t_int * stages
-    quantization = noise.quantization_noise(s["max_well"], s["bit_depth"])
-    total = noise.total_noise(brighter, quantization, s["read_noise"], s["other_noise"])
-    snr_frame = contrast / total
-
-    def band_noise(irradiance):
-        return np.sqrt(radiometry.band_integral(detected(irradiance)) * exposure)
-
-    path_noise = band_noise(
-        optics * radiometry.focal_plane_irradiance(radiometry.path_radiance(atm), diameter, focal)
-    )
-    # Scene-plus-path noise of the brighter of target and background, without the
-    # sensor's own emission (computed as pyBSM does, E - E_other, for parity).
-    scene_and_path = np.maximum(
-        band_noise(target_irradiance - other_irradiance),
-        band_noise(background_irradiance - other_irradiance),
-    )
-    with np.errstate(invalid="ignore"):
-        scene_noise = np.sqrt(scene_and_path**2 - path_noise**2)
-
-    flags = atm["flags"]
-    flags = fl.set_flag(flags, "well_fill_limited", scale < 1.0)
-
-    def named(da, units, long_name):
-        return da.assign_attrs(units=units, long_name=long_name)
-
-    out = xr.Dataset(
-        {
-            "snr": named(noise.stacked_snr(snr_frame, s["frame_stacks"]), "1",
-                         "contrast signal-to-noise ratio after frame stacking"),
-            "snr_frame": named(snr_frame, "1", "single-frame contrast signal-to-noise ratio"),
-            "integration_time": named(t_int, "s", "integration time after the well-fill limit"),
-            "target_photoelectrons": named(n_target, "1", "target photoelectrons"),
-            "background_photoelectrons": named(n_background, "1", "background photoelectrons"),
-            "contrast_photoelectrons": named(contrast, "1", "contrast photoelectrons"),
-            "well_fill": named(brighter / s["max_well"], "1", "well fill fraction"),
-            "shot_noise": named(noise.shot_noise(brighter), "1", "shot noise"),
-            "scene_noise": named(scene_noise, "1", "scene noise"),
-            "path_noise": named(path_noise, "1", "path radiance noise"),
-            "self_emission_noise": named(
-                band_noise(other_irradiance), "1", "self-emission and stray-light noise"
-            ),
-            "dark_current_noise": named(
-                noise.dark_current_noise(s["dark_current"], t_int, stages), "1",
-                "dark current noise",
-            ),
-            "quantization_noise": named(xr.DataArray(quantization), "1", "quantization noise"),
-            "read_noise": named(s["read_noise"], "1", "read noise"),
-            "other_noise": named(s["other_noise"], "1", "other noise"),
-            "total_noise": named(total, "1", "total noise"),
-            "spectral_weights": named(
-                target_spectral_rate, "s-1 m-1", "target spectral photoelectron rate"
-            ),
-            "flags": flags,
-        }
-    )
-    out.attrs["method"] = m.name
-    out.attrs["targets"] = targets
+    atm = _band_atmosphere(sensor, scenario, m)
+    target, background = radiometry.aperture_radiances(
+        atm, scenario, targets, sensor["wavelength_min"], m.constants)
+    signal = radiometry.signal_terms(sensor, atm, target, background, m.constants)
+    noise_ = noise.noise_terms(signal, sensor)
+    brighter = np.maximum(signal["target_photoelectrons"], signal["background_photoelectrons"])
+    flags = fl.set_flag(atm["flags"], "well_fill_limited", signal["well_fill_scale"] < 1.0)
+    out = xr.Dataset({
+        "snr": noise_["snr"],
+        "snr_frame": noise_["snr_frame"],
+        **{name: signal[name] for name in (
+            "integration_time", "target_photoelectrons", "background_photoelectrons",
+            "contrast_photoelectrons")},
+        "well_fill": (brighter / sensor["max_well"]).assign_attrs(
+            units="1", long_name="well fill fraction"),
+        **{name: noise_[name] for name in noise_.data_vars if name not in ("snr", "snr_frame")},
+        "spectral_weights": signal["spectral_weights"],
+        "flags": flags,
+    })
+    out.attrs.update(method=m.name, targets=targets)
     return _drop_scalar_coords(out)
+
+
+def _band_atmosphere(sensor: xr.Dataset, scenario: xr.Dataset, m: Method) -> xr.Dataset:
+    """The atmosphere over the sensor's band for every scenario, by the method's knobs."""
+    return band_atmosphere(
+        scenario["altitude"], scenario["ground_range"], scenario["visibility"],
+        sensor["wavelength_min"], sensor["wavelength_max"],
+        interpolation=m.atmosphere_interpolation, band_edges=m.band_edges)
 
 
 def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, reflectance=None,
@@ -320,14 +132,12 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
         reflectance = xr.DataArray(values, dims="reflectance", coords={"reflectance": values})
     if integration_time is None:
         integration_time = s["integration_time"]
-    atm = band_atmosphere(s, scenario, m)
-    wavelength = atm["wavelength"]
-    optics, qe, other_irradiance = _focal_plane_terms(s, wavelength, k)
+    atm = _band_atmosphere(s, scenario, m)
+    band = radiometry.sensor_band_terms(s, atm["wavelength"], k)
     radiance = radiometry.total_radiance(atm, reflectance, temperature, k)
-    irradiance = optics * radiometry.focal_plane_irradiance(
-        radiance, s["aperture_diameter"], s["focal_length"]) + other_irradiance
     spectral = radiometry.photon_detection_rate(
-        irradiance, qe, s["detector_width_x"], s["detector_width_y"], k)
+        radiometry.detector_irradiance(radiance, band, s), band["quantum_efficiency"],
+        s["detector_width_x"], s["detector_width_y"], k)
     rate = radiometry.band_integral(spectral) + s["dark_current"]
     counts = rate * integration_time * s["tdi_stages"]
     saturation = counts.max("reflectance") / s["max_well"]
@@ -336,7 +146,7 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
     brightest = spectral.isel(reflectance=-1, drop=True)
     flags = fl.set_flag(atm["flags"], "well_fill_limited", scale < 1.0)
     out = xr.Dataset({
-        "photoelectrons": counts.assign_attrs(units="1", long_name="photoelectrons per pixel"),
+        "photoelectrons": counts.assign_attrs(units="count", long_name="photoelectrons per pixel"),
         "integration_time": (integration_time * scale).assign_attrs(
             units="s", long_name="integration time after the well limit"),
         "spectral_weights": (brightest / brightest.max("wavelength")).assign_attrs(

@@ -418,3 +418,165 @@ def resample_spectral(values, wavelength: xr.DataArray, name: str):
         output_dtypes=[float],
     )
     return out.assign_coords(wavelength=wavelength).assign_attrs(values.attrs)
+
+
+def aperture_radiances(atmosphere: xr.Dataset, scenario: xr.Dataset, targets: str,
+                       wavelength_min, constants=CODATA):
+    """Aperture radiance of the target and of its background (paper Eq. 1).
+
+    Parameters
+    ----------
+    atmosphere : xr.Dataset
+        Atmosphere over the band.
+    scenario : xr.Dataset
+        From :func:`xbsm.scenario` (its reflectances and temperatures, for ``"scenario"``).
+    targets : {"giqe", "scenario"}
+        The GIQE standard target and background, or the scenario's own.
+    wavelength_min : float
+        Band start (selects the emissive GIQE target from 2.9 um). [m]
+    constants : Constants
+        Physical constants.
+
+    Returns
+    -------
+    target, background : xr.DataArray
+        [W m-2 sr-1 m-1]
+    """
+    if targets == "giqe":
+        emissive = is_emissive_band(float(wavelength_min))
+        return tuple(giqe_radiance(atmosphere, standard, emissive, constants)
+                     for standard in (GIQE_TARGET, GIQE_BACKGROUND))
+    return tuple(total_radiance(atmosphere, scenario[f"{surface}_reflectance"],
+                                scenario[f"{surface}_temperature"], constants)
+                 for surface in ("target", "background"))
+
+
+def sensor_band_terms(sensor: xr.Dataset, wavelength: xr.DataArray,
+                      constants=CODATA) -> xr.Dataset:
+    """What the sensor contributes on the band: throughput, QE and its own irradiance.
+
+    Parameters
+    ----------
+    sensor : xr.Dataset
+        From :func:`xbsm.sensor`.
+    wavelength : xr.DataArray
+        The band's wavelengths. [m]
+    constants : Constants
+        Physical constants.
+
+    Returns
+    -------
+    xr.Dataset
+        ``optics_transmission`` (with the cold filter and the central obscuration) [1],
+        ``quantum_efficiency`` [1] and ``sensor_irradiance`` (self-emission of the cold
+        shield, optics and cold stop, plus stray light) [W m-2 m-1] (paper Eq. 2).
+    """
+    s = sensor
+    diameter, focal = s["aperture_diameter"], s["focal_length"]
+    optics = (s["cold_filter_transmission"] * (1.0 - s["obscuration_ratio"] ** 2)
+              * resample_spectral(s["optics_transmission"], wavelength, "optics_transmission"))
+    self_emission = (
+        cold_shield_self_emission(wavelength, s["cold_shield_temperature"], diameter, focal,
+                                  constants)
+        + optics_self_emission(wavelength, s["optics_temperature"], s["optics_emissivity"],
+                               s["cold_filter_transmission"], diameter, focal, constants)
+        + cold_stop_self_emission(wavelength, s["cold_filter_temperature"],
+                                  s["cold_filter_emissivity"], diameter, focal, constants)
+    )
+    sensor_irradiance = self_emission + resample_spectral(s["stray_irradiance"], wavelength,
+                                                          "stray_irradiance")
+    return xr.Dataset({
+        "optics_transmission": _named(optics, "1", "optics transmission on the band"),
+        "quantum_efficiency": _named(
+            resample_spectral(s["quantum_efficiency"], wavelength, "quantum_efficiency"),
+            "1", "quantum efficiency on the band"),
+        "sensor_irradiance": _named(sensor_irradiance, "W m-2 m-1",
+                                    "self-emission and stray focal-plane spectral irradiance"),
+    })
+
+
+def detector_irradiance(radiance, band: xr.Dataset, sensor: xr.Dataset):
+    """Focal-plane spectral irradiance from a scene radiance plus the sensor's own (Eq. 2).
+
+    Parameters
+    ----------
+    radiance : xr.DataArray
+        Aperture spectral radiance. [W m-2 sr-1 m-1]
+    band : xr.Dataset
+        From :func:`sensor_band_terms`.
+    sensor : xr.Dataset
+        From :func:`xbsm.sensor`.
+
+    Returns
+    -------
+    xr.DataArray
+        [W m-2 m-1]
+    """
+    scene = focal_plane_irradiance(radiance, sensor["aperture_diameter"], sensor["focal_length"])
+    out = band["optics_transmission"] * scene + band["sensor_irradiance"]
+    return _named(out, "W m-2 m-1", "focal-plane spectral irradiance")
+
+
+def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
+                 background_radiance, constants=CODATA) -> xr.Dataset:
+    """Photoelectrons of target and background in one integration, by name (Sec. 2.2).
+
+    Parameters
+    ----------
+    sensor : xr.Dataset
+        From :func:`xbsm.sensor`.
+    atmosphere : xr.Dataset
+        Atmosphere over the band (its path radiance feeds the path noise).
+    target_radiance, background_radiance : xr.DataArray
+        Aperture spectral radiances, from :func:`aperture_radiances`. [W m-2 sr-1 m-1]
+    constants : Constants
+        Physical constants.
+
+    Returns
+    -------
+    xr.Dataset
+        ``target_photoelectrons``, ``background_photoelectrons``,
+        ``contrast_photoelectrons`` [count]; ``integration_time`` after the
+        well-fill limit [s]; ``well_fill_scale`` [1]; ``spectral_weights``, the
+        target's spectral photoelectron rate [s-1 m-1]; and the band photoelectron
+        rates the noise terms need: ``path_rate``, ``target_scene_rate``,
+        ``background_scene_rate`` (scene plus path, without the sensor's own
+        irradiance) and ``sensor_rate`` [s-1].
+    """
+    s, k = sensor, constants
+    band = sensor_band_terms(s, atmosphere["wavelength"], k)
+    other = band["sensor_irradiance"]
+
+    def rate(irradiance):
+        return band_integral(photon_detection_rate(
+            irradiance, band["quantum_efficiency"], s["detector_width_x"],
+            s["detector_width_y"], k))
+
+    target_irradiance = detector_irradiance(target_radiance, band, s)
+    background_irradiance = detector_irradiance(background_radiance, band, s)
+    spectral = photon_detection_rate(target_irradiance, band["quantum_efficiency"],
+                                     s["detector_width_x"], s["detector_width_y"], k)
+    t, stages = s["integration_time"], s["tdi_stages"]  # pyBSM's operation order (parity)
+    full_target = (band_integral(spectral) + s["dark_current"]) * t * stages
+    full_background = (rate(background_irradiance) + s["dark_current"]) * t * stages
+    scale = well_fill_scale(np.maximum(full_target, full_background), s["max_well"],
+                            s["max_well_fill"])
+    n_target, n_background = scale * full_target, scale * full_background
+    path = band["optics_transmission"] * focal_plane_irradiance(
+        path_radiance(atmosphere), s["aperture_diameter"], s["focal_length"])
+    return xr.Dataset({
+        "target_photoelectrons": _named(n_target, "count", "target photoelectrons"),
+        "background_photoelectrons": _named(n_background, "count", "background photoelectrons"),
+        "contrast_photoelectrons": _named(n_target - n_background, "count",
+                                          "contrast photoelectrons"),
+        "integration_time": _named(scale * s["integration_time"], "s",
+                                   "integration time after the well-fill limit"),
+        "well_fill_scale": scale,
+        "spectral_weights": _named(spectral, "s-1 m-1", "target spectral photoelectron rate"),
+        "path_rate": _named(rate(path), "s-1", "path radiance photoelectron rate"),
+        "target_scene_rate": _named(rate(target_irradiance - other), "s-1",
+                                    "target scene and path photoelectron rate"),
+        "background_scene_rate": _named(rate(background_irradiance - other), "s-1",
+                                        "background scene and path photoelectron rate"),
+        "sensor_rate": _named(rate(other), "s-1", "self-emission and stray photoelectron rate"),
+    })
