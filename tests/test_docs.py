@@ -20,6 +20,7 @@ PAGES = ("index", "guide", "migration", "quirks", "flags", "api", "validation")
 API_MODULES = (
     "xbsm.params", "xbsm.pybsm_compat", "xbsm.methods", "xbsm.model", "xbsm.atmosphere",
     "xbsm.geometry", "xbsm.radiometry", "xbsm.noise", "xbsm.quadrature", "xbsm.metrics",
+    "xbsm.metrics.edge", "xbsm.metrics.grd", "xbsm.metrics.giqe", "xbsm.metrics.pybsm_numerics",
     "xbsm.flags", "xbsm.examples", "xbsm.plot", "xbsm.cli",
     "xbsm.otf.aperture", "xbsm.otf.defocus", "xbsm.otf.detector", "xbsm.otf.filters",
     "xbsm.otf.motion", "xbsm.otf.psf", "xbsm.otf.spectral", "xbsm.otf.system",

@@ -1,20 +1,11 @@
-r"""Image-quality metrics: edge response, RER, EHO, GRD and the GIQE versions.
+r"""NIIRS from the General Image Quality Equation, versions 3, 4 and 5.
 
-Inputs are OTF slices: DataArrays with a ``frequency`` dimension whose
-coordinate is angular spatial frequency in object space [cycles/rad]. Every
-other dimension (orientation, scenario sweeps) broadcasts and is never
-reduced. The frequency integrals use a quadrature rule from
-:mod:`xbsm.quadrature`; sample the OTF at its nodes and pass its weights.
-
-Which part of the OTF to use
-----------------------------
-:func:`edge_response` integrates the complex OTF exactly (real part against
-the sine, imaginary part against the cosine). For a symmetric PSF the OTF is
-real and may be negative (sinc lobes, defocus, drift); pass it as is. pyBSM
-0.16.1 passes :math:`|OTF|`, which folds the negative lobes up and biases RER
-high or low; ``docs/metrics.md`` quantifies this (a rect detector alone gives
-RER = 1 exactly with the OTF, 0.867 with its modulus). To reproduce pyBSM, pass
-``abs(otf)``.
+Each version has a calibration (:class:`GiqeCalibration`): the ranges of SNR,
+RER, GSD, elevation (and for GIQE 5 the ground-plane GSD and the sampling
+ratio Q) over which it was fitted or validated. The GIQE functions return the
+prediction with flags (:mod:`xbsm.flags`) set where an input or the prediction
+is outside the version's calibration. RER and EHO come from
+:mod:`xbsm.metrics.edge`.
 """
 
 from __future__ import annotations
@@ -30,432 +21,31 @@ import xarray as xr
 from xbsm import flags as _flags
 
 __all__ = [
-    "EHO_POSITIONS",
     "GIQE3_CALIBRATION",
     "GIQE4_CALIBRATION",
     "GIQE5_CALIBRATION",
     "GIQE_CALIBRATIONS",
     "INCH",
     "GiqeCalibration",
-    "edge_height_overshoot",
-    "edge_response",
-    "edge_terms",
     "giqe3",
     "giqe4",
     "giqe5",
     "giqe5_rer",
     "giqe_calibrations",
     "giqe_flags",
-    "ground_resolved_distance",
-    "relative_edge_response",
     "sampling_q",
 ]
 
 INCH = 0.0254
 """One inch, the GSD unit inside every GIQE. [m]"""
 
-EHO_POSITIONS = np.arange(1.0, 3.25, 0.25)
-"""Distances from the edge at which EHO is evaluated: 1 to 3 px by 0.25. [px]"""
-
-RER_POSITIONS = np.array([-0.5, 0.5])
-
 
 def _attrs(da, units, long_name, **extra):
     return da.assign_attrs(units=units, long_name=long_name, **extra)
 
 
-def _as_position(position):
-    if isinstance(position, xr.DataArray):
-        return position
-    arr = np.asarray(position, dtype=float)
-    if arr.ndim == 0:
-        return xr.DataArray(float(arr))
-    if arr.ndim != 1:
-        raise ValueError("position must be a scalar, a 1-D array or a DataArray [px]")
-    return xr.DataArray(arr, dims="position", coords={"position": arr})
-
-
-def _check_slice(otf_slice, weights):
-    if not isinstance(otf_slice, xr.DataArray) or "frequency" not in otf_slice.dims:
-        raise ValueError("otf_slice must be an xr.DataArray with a 'frequency' dimension")
-    if weights is None:
-        if "frequency" not in otf_slice.coords:
-            raise ValueError("otf_slice needs a 'frequency' coordinate [cycles/rad]")
-        return
-    if otf_slice.sizes["frequency"] != weights.sizes["frequency"]:
-        raise ValueError("otf_slice and weights must have the same number of frequency samples")
-    if "frequency" in otf_slice.coords and "frequency" in weights.coords:
-        a = np.asarray(otf_slice["frequency"].values)
-        b = np.asarray(weights["frequency"].values)
-        if not np.array_equal(a, b):
-            raise ValueError(
-                "otf_slice must be sampled at the quadrature nodes: its 'frequency' "
-                "coordinate differs from that of weights"
-            )
-
-
-def _edge_kernels(weights, ifov, position, need_cosine):
-    """Sine (and cosine) tables: depend on (frequency, position, ifov) only.
-
-    The abscissa is the ``sine_frequency`` coordinate of ``weights`` (else its
-    ``frequency`` coordinate); it may carry sensor dimensions besides
-    ``frequency`` when every sensor of a sweep has nodes of its own.
-    """
-    f = weights.coords["sine_frequency"] if "sine_frequency" in weights.coords else weights[
-        "frequency"]
-    f = f.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
-    w = weights.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
-    phase = 2.0 * np.pi * f * ifov * position
-    sine = w * np.sin(phase) / f
-    cosine = w * np.cos(phase) / f if need_cosine else None
-    return sine, cosine
-
-
-def edge_response(otf_slice, ifov, position, weights):
-    r"""Normalised response to an ideal edge, at a distance from the edge.
-
-    Parameters
-    ----------
-    otf_slice : xr.DataArray
-        OTF (real or complex) sampled at the quadrature nodes along
-        ``frequency``; other dimensions broadcast. [1]
-    ifov : float or xr.DataArray
-        Detector instantaneous field of view (pitch / focal length). [rad]
-    position : float, array_like or xr.DataArray
-        Distance from the edge; a 1-D array becomes dimension ``position``. [px]
-    weights : xr.DataArray
-        Quadrature weights from :func:`xbsm.quadrature.edge_quadrature` (or
-        one of its building blocks) on the same ``frequency`` coordinate.
-        [cycles/rad]
-
-    Returns
-    -------
-    xr.DataArray
-        Edge response, 0 far on the dark side and 1 far on the bright side,
-        broadcast over every input dimension. [1]
-
-    Notes
-    -----
-    IBSM Eq. 3-63, written for a complex OTF :math:`H` so that asymmetric
-    PSFs are handled too:
-
-    .. math::
-
-        ER(x) = \frac{1}{2} + \frac{1}{\pi}\sum_k c_k\,
-                \frac{\operatorname{Re}H(f_k)\sin(2\pi w_k\theta x)
-                      + \operatorname{Im}H(f_k)\cos(2\pi w_k\theta x)}{w_k}
-
-    with weights :math:`c_k` and abscissae :math:`w_k` (the ``sine_frequency``
-    coordinate of ``weights``; :math:`w_k = f_k` except in the pyBSM rule).
-    The sine and cosine tables depend only on (frequency, position, ifov)
-    and are computed once, then contracted with the OTF by a dot product.
-    """
-    _check_slice(otf_slice, weights)
-    pos = _as_position(position)
-    complex_input = otf_slice.dtype.kind == "c"
-    sine, cosine = _edge_kernels(weights, ifov, pos, complex_input)
-    h = otf_slice.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
-    if complex_input:
-        integral = xr.dot(np.real(h), sine, dim="frequency") + xr.dot(
-            np.imag(h), cosine, dim="frequency"
-        )
-    else:
-        integral = xr.dot(h, sine, dim="frequency")
-    out = 0.5 + integral / np.pi
-    return _attrs(out, "1", "edge response", references="IBSM Eq. 3-63")
-
-
-def relative_edge_response(otf_slice, ifov, weights):
-    r"""Relative edge response: the rise of the edge response across one pixel.
-
-    Parameters
-    ----------
-    otf_slice : xr.DataArray
-        OTF sampled at the quadrature nodes along ``frequency``. [1]
-    ifov : float or xr.DataArray
-        Detector IFOV. [rad]
-    weights : xr.DataArray
-        Quadrature weights on the same ``frequency`` coordinate. [cycles/rad]
-
-    Returns
-    -------
-    xr.DataArray
-        RER. [1]
-
-    Notes
-    -----
-    IBSM Eq. 3-61:
-
-    .. math:: RER = ER(+\tfrac{1}{2}) - ER(-\tfrac{1}{2})
-    """
-    er = edge_response(otf_slice, ifov, RER_POSITIONS, weights)
-    rer = er.sel(position=0.5, drop=True) - er.sel(position=-0.5, drop=True)
-    return _attrs(rer, "1", "relative edge response", references="IBSM Eq. 3-61")
-
-
-def _eho_from_er(er):
-    rising = (er.diff("position") > 0).all("position")
-    eho = xr.where(
-        rising,
-        er.sel(position=1.25, drop=True),
-        er.max("position", skipna=False),
-    )
-    return _attrs(eho, "1", "edge height overshoot", references="IBSM Eq. 3-60")
-
-
-def edge_height_overshoot(otf_slice, ifov, weights):
-    r"""Edge height overshoot: peak of the edge response 1 to 3 px from the edge.
-
-    Parameters
-    ----------
-    otf_slice : xr.DataArray
-        OTF sampled at the quadrature nodes along ``frequency``. [1]
-    ifov : float or xr.DataArray
-        Detector IFOV. [rad]
-    weights : xr.DataArray
-        Quadrature weights on the same ``frequency`` coordinate. [cycles/rad]
-
-    Returns
-    -------
-    xr.DataArray
-        EHO. [1]
-
-    Notes
-    -----
-    IBSM Eq. 3-60 as corrected by Leachtenauer et al. (1997): with
-    :math:`x_j = 1, 1.25, \dots, 3` px,
-
-    .. math::
-
-        EHO = \begin{cases}
-              ER(1.25) & \text{if } ER(x_{j+1}) > ER(x_j)\ \forall j \\
-              \max_j ER(x_j) & \text{otherwise}
-              \end{cases}
-
-    This is pyBSM 0.16.1's rule (strict increase; a NaN anywhere gives NaN).
-    """
-    er = edge_response(otf_slice, ifov, EHO_POSITIONS, weights)
-    return _eho_from_er(er)
-
-
-def edge_terms(otf_slice, ifov, weights):
-    """RER and EHO from one evaluation of the edge response.
-
-    Parameters
-    ----------
-    otf_slice : xr.DataArray
-        OTF sampled at the quadrature nodes along ``frequency``. [1]
-    ifov : float or xr.DataArray
-        Detector IFOV. [rad]
-    weights : xr.DataArray
-        Quadrature weights on the same ``frequency`` coordinate. [cycles/rad]
-
-    Returns
-    -------
-    xr.Dataset
-        ``rer`` (IBSM Eq. 3-61) and ``eho`` (IBSM Eq. 3-60). [1]
-    """
-    positions = np.concatenate([RER_POSITIONS, EHO_POSITIONS])
-    er = edge_response(otf_slice, ifov, positions, weights)
-    rer = er.sel(position=0.5, drop=True) - er.sel(position=-0.5, drop=True)
-    rer = _attrs(rer, "1", "relative edge response", references="IBSM Eq. 3-61")
-    eho = _eho_from_er(er.sel(position=EHO_POSITIONS))
-    return xr.Dataset({"rer": rer, "eho": eho})
-
-
-# --------------------------------------------------------------------------
-# Ground resolved distance
-
-
-def _first_crossing(mtf, freq, threshold):
-    """First frequency where ``mtf`` falls to ``threshold`` (linear interpolation)."""
-    below = mtf <= threshold
-    crossed = below.cumsum("frequency") > 0
-    prev_crossed = crossed.shift(frequency=1, fill_value=False)
-    first = crossed & ~prev_crossed
-    m1 = mtf.shift(frequency=1)
-    f1 = freq.shift(frequency=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        frac = (m1 - threshold) / (m1 - mtf)
-    seg = f1 + frac * (freq - f1)
-    # a crossing at the first sample: interpolate from the implicit (0, 1)
-    f0 = freq.isel(frequency=0)
-    m0 = mtf.isel(frequency=0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        start = xr.where((f0 > 0) & (m0 < 1.0), f0 * (1.0 - threshold) / (1.0 - m0), f0)
-    start = xr.where(threshold >= 1.0, 0.0, start)
-    seg = xr.where(freq == f0, start, seg)
-    u = xr.where(first, seg, 0.0).sum("frequency")
-    any_cross = crossed.any("frequency")
-    return xr.where(any_cross, u, freq.max("frequency"))
-
-
-def _np_interp_reversed(mtf, freq, threshold, n):
-    """``numpy.interp(threshold, mtf[::-1], freq[::-1])``, vectorised.
-
-    Reproduces NumPy's search (a guess-then-bisect lookup that assumes
-    increasing abscissae) so that non-monotonic MTFs give pyBSM's answer.
-    """
-    xp = mtf.isel(frequency=slice(None, None, -1))
-    fp = freq.isel(frequency=slice(None, None, -1))
-    key = threshold
-
-    def kernel(xp_, fp_, key_):
-        shape = np.broadcast_shapes(xp_.shape[:-1], fp_.shape[:-1], np.shape(key_))
-        xp_ = np.broadcast_to(xp_, shape + (n,))
-        fp_ = np.broadcast_to(fp_, shape + (n,))
-        key_ = np.broadcast_to(key_, shape)
-        xp2 = xp_.reshape(-1, n)
-        fp2 = fp_.reshape(-1, n)
-        k = key_.reshape(-1)
-        rows = np.arange(k.size)
-        j = _numpy_binary_search(k, xp2)
-        jc = np.clip(j, 0, n - 2)
-        x0, x1 = xp2[rows, jc], xp2[rows, jc + 1]
-        y0, y1 = fp2[rows, jc], fp2[rows, jc + 1]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            slope = (y1 - y0) / (x1 - x0)
-            res = slope * (k - x0) + y0
-            alt = slope * (k - x1) + y1
-        res = np.where(np.isnan(res), alt, res)
-        res = np.where(np.isnan(res) & (y0 == y1), y0, res)
-        res = np.where(x0 == k, y0, res)
-        res = np.where(j == n - 1, fp2[:, n - 1], res)
-        res = np.where(j == -1, fp2[:, 0], res)
-        res = np.where(j == n, fp2[:, n - 1], res)
-        res = np.where(np.isnan(k), np.nan, res)
-        return res.reshape(shape)
-
-    return xr.apply_ufunc(
-        kernel,
-        xp,
-        fp,
-        key,
-        input_core_dims=[["frequency"], ["frequency"], []],
-        dask="parallelized",
-        output_dtypes=[float],
-    )
-
-
-_LIKELY_IN_CACHE = 8
-
-
-def _numpy_binary_search(key, arr):
-    """Row-wise index j with arr[j] <= key < arr[j+1], as NumPy's interp finds it.
-
-    Mirrors the search NumPy's ``interp`` performs for its first query point
-    (initial guess 0): a check of the first few cells, then bisection. For
-    increasing rows it is the ordinary bracket; for other rows it returns the
-    same (arbitrary) bracket NumPy does.
-    """
-    m, n = arr.shape
-    rows = np.arange(m)
-    out = np.full(m, -2, dtype=np.int64)
-    out[key > arr[:, -1]] = n
-    out[(out == -2) & (key < arr[:, 0])] = -1
-    todo = out == -2
-    if n <= 4:
-        # linear search: first i with key < arr[i], minus one
-        less = key[:, None] < arr
-        first = np.where(less.any(axis=1), less.argmax(axis=1), n)
-        out[todo] = first[todo] - 1
-        return out
-    guess = 1
-    imin = np.zeros(m, dtype=np.int64)
-    imax = np.full(m, n, dtype=np.int64)
-    a_g = arr[:, guess]
-    lt_g = key < a_g
-    # key < arr[guess] and key >= arr[guess-1] (= arr[0], checked above)
-    done = todo & lt_g
-    out[done] = guess - 1
-    todo &= ~done
-    a_g1, a_g2 = arr[:, guess + 1], arr[:, guess + 2]
-    done = todo & (key < a_g1)
-    out[done] = guess
-    todo &= ~done
-    done = todo & (key < a_g2)
-    out[done] = guess + 1
-    todo &= ~done
-    imin[todo] = guess + 2
-    if guess < n - _LIKELY_IN_CACHE - 1:
-        narrow = todo & (key < arr[:, guess + _LIKELY_IN_CACHE])
-        imax[narrow] = guess + _LIKELY_IN_CACHE
-    lo, hi = imin.copy(), imax.copy()
-    for _ in range(int(np.ceil(np.log2(n))) + 2):
-        active = todo & (lo < hi)
-        if not active.any():
-            break
-        mid = lo + ((hi - lo) >> 1)
-        ge = key >= arr[rows, np.clip(mid, 0, n - 1)]
-        lo = np.where(active & ge, mid + 1, lo)
-        hi = np.where(active & ~ge, mid, hi)
-    out[todo] = lo[todo] - 1
-    return out
-
-
-def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first_crossing"):
-    r"""Ground resolved distance: period of the finest resolvable square wave.
-
-    Parameters
-    ----------
-    otf_slice : xr.DataArray
-        OTF or MTF along ``frequency`` (its modulus is used), in increasing
-        frequency; OTF(0) = 1 is assumed if the first sample is above 0. [1]
-    snr : float or xr.DataArray
-        Contrast signal-to-noise ratio. [1]
-    ifov : float or xr.DataArray
-        Detector IFOV. [rad]
-    slant_range : float or xr.DataArray
-        Sensor-to-target distance. [m]
-    method : {"first_crossing", "pybsm"}
-        ``"first_crossing"``: the first frequency at which the MTF falls to
-        3/SNR, linearly interpolated; correct for non-monotonic MTFs (a
-        contrast-reversed lobe above the threshold is not "resolved"). If the
-        MTF never falls to the threshold, the highest sampled frequency is
-        used (GRD is then an upper bound). SNR <= 3 gives GRD = inf (nothing
-        is resolved); SNR <= 0 gives NaN.
-        ``"pybsm"``: pyBSM 0.16.1's rule, ``numpy.interp`` on the reversed MTF
-        with frequencies :math:`k\,\Delta f` and a +1e-12 guard; silently
-        wrong for non-monotonic MTFs, kept for parity.
-
-    Returns
-    -------
-    xr.DataArray
-        GRD. [m]
-
-    Notes
-    -----
-    IBSM Eq. 3-54, with :math:`u_r` the frequency where
-    :math:`MTF(u_r) = 3/SNR`:
-
-    .. math:: GRD = R\,\max\left(\frac{1}{u_r},\ 2\theta\right)
-    """
-    _check_slice(otf_slice, None)
-    mtf = np.abs(otf_slice.reset_coords(drop=True))
-    freq = otf_slice["frequency"].reset_coords(drop=True)
-    freq = xr.DataArray(np.asarray(freq), dims="frequency", coords={"frequency": freq.values})
-    mtf = mtf.assign_coords(frequency=freq.values)
-    snr = xr.DataArray(snr) if not isinstance(snr, xr.DataArray) else snr
-    with np.errstate(divide="ignore", invalid="ignore"):
-        threshold = 3.0 / snr
-    if method == "pybsm":
-        n = mtf.sizes["frequency"]
-        u_r = _np_interp_reversed(mtf, freq, threshold, n) + 1e-12
-        with np.errstate(divide="ignore"):
-            grd = slant_range * np.maximum(1.0 / u_r, 2.0 * ifov)
-    elif method == "first_crossing":
-        u_r = _first_crossing(mtf, freq, threshold)
-        with np.errstate(divide="ignore"):
-            inv = xr.where(u_r > 0, 1.0 / u_r.where(u_r > 0), np.inf)
-        grd = slant_range * np.maximum(inv, 2.0 * ifov)
-        grd = grd.where(snr > 0)
-    else:
-        raise ValueError(f"method must be 'first_crossing' or 'pybsm', got {method!r}")
-    return _attrs(grd, "m", "ground resolved distance", references="IBSM Eq. 3-54")
-
-
-# --------------------------------------------------------------------------
-# GIQE
+def _da(x):
+    return x if isinstance(x, xr.DataArray) else xr.DataArray(x)
 
 
 @dataclass(frozen=True)
@@ -551,14 +141,13 @@ def _check_range(name, value):
 
 
 # Each limit below has its source on the line before it. "Unverified" means
-# the number could not be traced to a retrievable primary source; docs/flags.md
-# says so too.
+# the number is not traced to a primary source; docs/flags.md says so too.
 #
 # GIQE 4 (Leachtenauer et al., Appl. Opt. 36(32), 8322, 1997).
 GIQE4_CALIBRATION = GiqeCalibration(
     # SNR 2-130, RER 0.2-1.3, GSD 3-80 in: the GIQE 4 development ranges as
-    # widely quoted (e.g. Fiete 2010). UNVERIFIED: only the abstract of the
-    # 1997 paper was retrievable.
+    # widely quoted (e.g. Fiete 2010). UNVERIFIED against the 1997 paper
+    # itself (its abstract gives no ranges).
     snr=(2.0, 130.0),
     rer=(0.2, 1.3),
     gsd=(3 * INCH, 80 * INCH),
@@ -572,14 +161,14 @@ GIQE4_CALIBRATION = GiqeCalibration(
     "elevation: NGA GIQE 5 report 2015 (GIQE 4 fitted at 25-90 deg)",
 )
 
-# GIQE 3 (IBSM Eq. 3-56). No published GIQE 3 range was retrievable.
+# GIQE 3 (IBSM Eq. 3-56). No published GIQE 3 range is known.
 GIQE3_CALIBRATION = GiqeCalibration(
     # GIQE 4's SNR, RER and GSD ranges reused. UNVERIFIED for GIQE 3.
     snr=GIQE4_CALIBRATION.snr,
     rer=GIQE4_CALIBRATION.rer,
     gsd=GIQE4_CALIBRATION.gsd,
     # Not tested: GIQE 3 has no elevation term and no published elevation range
-    # was found (set one with .replace(elevation=...) if wanted).
+    # (set one with .replace(elevation=...) if wanted).
     elevation=None,
     niirs=(0.0, 10.0),
     source="GIQE 4 SNR/RER/GSD ranges reused (unverified: no published GIQE 3 range "
@@ -750,10 +339,6 @@ def giqe_flags(*, snr, rer, gsd, elevation=None, niirs=None, calibration=GIQE4_C
     for name, cond in conds.items():
         out = _flags.set_flag(out, name, cond)
     return out.assign_attrs(_flags.flag_attrs("GIQE validity flags"))
-
-
-def _da(x):
-    return x if isinstance(x, xr.DataArray) else xr.DataArray(x)
 
 
 def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,

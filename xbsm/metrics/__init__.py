@@ -1,0 +1,64 @@
+"""Image-quality metrics: edge response, RER, EHO, GRD and the GIQE versions.
+
+The stages follow the data flow, each in its own module:
+
+- :mod:`xbsm.metrics.edge`: edge response, relative edge response (RER) and
+  edge height overshoot (EHO) from an OTF slice and quadrature weights.
+- :mod:`xbsm.metrics.grd`: ground resolved distance from an MTF slice and the
+  contrast SNR.
+- :mod:`xbsm.metrics.giqe`: NIIRS from GIQE 3, 4 and 5, each version's
+  calibration ranges, the validity flags and the sampling ratio Q.
+- :mod:`xbsm.metrics.pybsm_numerics`: NumPy's interpolation search, copied so
+  that ``method="pybsm"`` reproduces pyBSM 0.16.1 bit for bit.
+
+Every public name of the first three is available here, e.g.
+``xbsm.metrics.giqe5``.
+"""
+
+from .edge import (
+    EHO_POSITIONS,
+    RER_POSITIONS,
+    edge_height_overshoot,
+    edge_response,
+    edge_terms,
+    relative_edge_response,
+)
+from .giqe import (
+    GIQE3_CALIBRATION,
+    GIQE4_CALIBRATION,
+    GIQE5_CALIBRATION,
+    GIQE_CALIBRATIONS,
+    INCH,
+    GiqeCalibration,
+    giqe3,
+    giqe4,
+    giqe5,
+    giqe5_rer,
+    giqe_calibrations,
+    giqe_flags,
+    sampling_q,
+)
+from .grd import ground_resolved_distance
+
+__all__ = [
+    "EHO_POSITIONS",
+    "GIQE3_CALIBRATION",
+    "GIQE4_CALIBRATION",
+    "GIQE5_CALIBRATION",
+    "GIQE_CALIBRATIONS",
+    "INCH",
+    "RER_POSITIONS",
+    "GiqeCalibration",
+    "edge_height_overshoot",
+    "edge_response",
+    "edge_terms",
+    "giqe3",
+    "giqe4",
+    "giqe5",
+    "giqe5_rer",
+    "giqe_calibrations",
+    "giqe_flags",
+    "ground_resolved_distance",
+    "relative_edge_response",
+    "sampling_q",
+]

@@ -1,0 +1,241 @@
+r"""Edge response, relative edge response (RER) and edge height overshoot (EHO).
+
+Inputs are OTF slices: DataArrays with a ``frequency`` dimension whose
+coordinate is angular spatial frequency in object space [cycles/rad]. Every
+other dimension (orientation, scenario sweeps) broadcasts and is never
+reduced. The frequency integrals use a quadrature rule from
+:mod:`xbsm.quadrature`; sample the OTF at its nodes and pass its weights.
+
+Which part of the OTF to use
+----------------------------
+:func:`edge_response` integrates the complex OTF exactly (real part against
+the sine, imaginary part against the cosine). For a symmetric PSF the OTF is
+real and may be negative (sinc lobes, defocus, drift); pass it as is. pyBSM
+0.16.1 passes :math:`|OTF|`, which folds the negative lobes up and biases RER
+high or low; ``docs/metrics.md`` quantifies this (a rect detector alone gives
+RER = 1 exactly with the OTF, 0.867 with its modulus). To reproduce pyBSM, pass
+``abs(otf)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+__all__ = [
+    "EHO_POSITIONS",
+    "RER_POSITIONS",
+    "edge_height_overshoot",
+    "edge_response",
+    "edge_terms",
+    "relative_edge_response",
+]
+
+EHO_POSITIONS = np.arange(1.0, 3.25, 0.25)
+"""Distances from the edge at which EHO is evaluated: 1 to 3 px by 0.25. [px]"""
+
+RER_POSITIONS = np.array([-0.5, 0.5])
+"""Distances from the edge whose difference is the RER: -0.5 and +0.5 px. [px]"""
+
+
+def _attrs(da, units, long_name, **extra):
+    return da.assign_attrs(units=units, long_name=long_name, **extra)
+
+
+def _as_position(position):
+    if isinstance(position, xr.DataArray):
+        return position
+    arr = np.asarray(position, dtype=float)
+    if arr.ndim == 0:
+        return xr.DataArray(float(arr))
+    if arr.ndim != 1:
+        raise ValueError("position must be a scalar, a 1-D array or a DataArray [px]")
+    return xr.DataArray(arr, dims="position", coords={"position": arr})
+
+
+def _check_slice(otf_slice, weights):
+    if not isinstance(otf_slice, xr.DataArray) or "frequency" not in otf_slice.dims:
+        raise ValueError("otf_slice must be an xr.DataArray with a 'frequency' dimension")
+    if weights is None:
+        if "frequency" not in otf_slice.coords:
+            raise ValueError("otf_slice needs a 'frequency' coordinate [cycles/rad]")
+        return
+    if otf_slice.sizes["frequency"] != weights.sizes["frequency"]:
+        raise ValueError("otf_slice and weights must have the same number of frequency samples")
+    if "frequency" in otf_slice.coords and "frequency" in weights.coords:
+        a = np.asarray(otf_slice["frequency"].values)
+        b = np.asarray(weights["frequency"].values)
+        if not np.array_equal(a, b):
+            raise ValueError(
+                "otf_slice must be sampled at the quadrature nodes: its 'frequency' "
+                "coordinate differs from that of weights"
+            )
+
+
+def _edge_kernels(weights, ifov, position, need_cosine):
+    """Sine (and cosine) tables: depend on (frequency, position, ifov) only.
+
+    The abscissa is the ``sine_frequency`` coordinate of ``weights`` (else its
+    ``frequency`` coordinate); it may carry sensor dimensions besides
+    ``frequency`` when every sensor of a sweep has nodes of its own.
+    """
+    f = weights.coords["sine_frequency"] if "sine_frequency" in weights.coords else weights[
+        "frequency"]
+    f = f.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
+    w = weights.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
+    phase = 2.0 * np.pi * f * ifov * position
+    sine = w * np.sin(phase) / f
+    cosine = w * np.cos(phase) / f if need_cosine else None
+    return sine, cosine
+
+
+def edge_response(otf_slice, ifov, position, weights):
+    r"""Normalised response to an ideal edge, at a distance from the edge.
+
+    Parameters
+    ----------
+    otf_slice : xr.DataArray
+        OTF (real or complex) sampled at the quadrature nodes along
+        ``frequency``; other dimensions broadcast. [1]
+    ifov : float or xr.DataArray
+        Detector instantaneous field of view (pitch / focal length). [rad]
+    position : float, array_like or xr.DataArray
+        Distance from the edge; a 1-D array becomes dimension ``position``. [px]
+    weights : xr.DataArray
+        Quadrature weights from :func:`xbsm.quadrature.edge_quadrature` (or
+        one of its building blocks) on the same ``frequency`` coordinate.
+        [cycles/rad]
+
+    Returns
+    -------
+    xr.DataArray
+        Edge response, 0 far on the dark side and 1 far on the bright side,
+        broadcast over every input dimension. [1]
+
+    Notes
+    -----
+    IBSM Eq. 3-63, written for a complex OTF :math:`H` so that asymmetric
+    PSFs are handled too:
+
+    .. math::
+
+        ER(x) = \frac{1}{2} + \frac{1}{\pi}\sum_k c_k\,
+                \frac{\operatorname{Re}H(f_k)\sin(2\pi w_k\theta x)
+                      + \operatorname{Im}H(f_k)\cos(2\pi w_k\theta x)}{w_k}
+
+    with weights :math:`c_k` and abscissae :math:`w_k` (the ``sine_frequency``
+    coordinate of ``weights``; :math:`w_k = f_k` except in the pyBSM rule).
+    The sine and cosine tables depend only on (frequency, position, ifov)
+    and are computed once, then contracted with the OTF by a dot product.
+    """
+    _check_slice(otf_slice, weights)
+    pos = _as_position(position)
+    complex_input = otf_slice.dtype.kind == "c"
+    sine, cosine = _edge_kernels(weights, ifov, pos, complex_input)
+    h = otf_slice.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
+    if complex_input:
+        integral = xr.dot(np.real(h), sine, dim="frequency") + xr.dot(
+            np.imag(h), cosine, dim="frequency"
+        )
+    else:
+        integral = xr.dot(h, sine, dim="frequency")
+    out = 0.5 + integral / np.pi
+    return _attrs(out, "1", "edge response", references="IBSM Eq. 3-63")
+
+
+def relative_edge_response(otf_slice, ifov, weights):
+    r"""Relative edge response: the rise of the edge response across one pixel.
+
+    Parameters
+    ----------
+    otf_slice : xr.DataArray
+        OTF sampled at the quadrature nodes along ``frequency``. [1]
+    ifov : float or xr.DataArray
+        Detector IFOV. [rad]
+    weights : xr.DataArray
+        Quadrature weights on the same ``frequency`` coordinate. [cycles/rad]
+
+    Returns
+    -------
+    xr.DataArray
+        RER. [1]
+
+    Notes
+    -----
+    IBSM Eq. 3-61:
+
+    .. math:: RER = ER(+\tfrac{1}{2}) - ER(-\tfrac{1}{2})
+    """
+    er = edge_response(otf_slice, ifov, RER_POSITIONS, weights)
+    rer = er.sel(position=0.5, drop=True) - er.sel(position=-0.5, drop=True)
+    return _attrs(rer, "1", "relative edge response", references="IBSM Eq. 3-61")
+
+
+def _eho_from_er(er):
+    rising = (er.diff("position") > 0).all("position")
+    eho = xr.where(
+        rising,
+        er.sel(position=1.25, drop=True),
+        er.max("position", skipna=False),
+    )
+    return _attrs(eho, "1", "edge height overshoot", references="IBSM Eq. 3-60")
+
+
+def edge_height_overshoot(otf_slice, ifov, weights):
+    r"""Edge height overshoot: peak of the edge response 1 to 3 px from the edge.
+
+    Parameters
+    ----------
+    otf_slice : xr.DataArray
+        OTF sampled at the quadrature nodes along ``frequency``. [1]
+    ifov : float or xr.DataArray
+        Detector IFOV. [rad]
+    weights : xr.DataArray
+        Quadrature weights on the same ``frequency`` coordinate. [cycles/rad]
+
+    Returns
+    -------
+    xr.DataArray
+        EHO. [1]
+
+    Notes
+    -----
+    IBSM Eq. 3-60 as corrected by Leachtenauer et al. (1997): with
+    :math:`x_j = 1, 1.25, \dots, 3` px,
+
+    .. math::
+
+        EHO = \begin{cases}
+              ER(1.25) & \text{if } ER(x_{j+1}) > ER(x_j)\ \forall j \\
+              \max_j ER(x_j) & \text{otherwise}
+              \end{cases}
+
+    This is pyBSM 0.16.1's rule (strict increase; a NaN anywhere gives NaN).
+    """
+    er = edge_response(otf_slice, ifov, EHO_POSITIONS, weights)
+    return _eho_from_er(er)
+
+
+def edge_terms(otf_slice, ifov, weights):
+    """RER and EHO from one evaluation of the edge response.
+
+    Parameters
+    ----------
+    otf_slice : xr.DataArray
+        OTF sampled at the quadrature nodes along ``frequency``. [1]
+    ifov : float or xr.DataArray
+        Detector IFOV. [rad]
+    weights : xr.DataArray
+        Quadrature weights on the same ``frequency`` coordinate. [cycles/rad]
+
+    Returns
+    -------
+    xr.Dataset
+        ``rer`` (IBSM Eq. 3-61) and ``eho`` (IBSM Eq. 3-60). [1]
+    """
+    positions = np.concatenate([RER_POSITIONS, EHO_POSITIONS])
+    er = edge_response(otf_slice, ifov, positions, weights)
+    rer = er.sel(position=0.5, drop=True) - er.sel(position=-0.5, drop=True)
+    rer = _attrs(rer, "1", "relative edge response", references="IBSM Eq. 3-61")
+    eho = _eho_from_er(er.sel(position=EHO_POSITIONS))
+    return xr.Dataset({"rer": rer, "eho": eho})
