@@ -18,7 +18,6 @@ import xarray as xr
 from . import examples, model, plot
 from .flags import flag
 from .methods import PRESETS
-from .methods import method as resolve_method
 
 WELL_FILL = flag("well_fill_limited")  # informational, not a validity problem
 
@@ -35,57 +34,61 @@ def _encode_for_netcdf(ds: xr.Dataset) -> xr.Dataset:
     return ds
 
 
-def run_olson(out: Path, method: str = "accurate") -> dict[str, xr.Dataset]:
-    """Compute and write the Olson example; return the per-band datasets."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out.mkdir(parents=True, exist_ok=True)
+def compute_olson(method: str = "accurate") -> dict[str, xr.Dataset]:
+    """NIIRS, SNR and their breakdowns of the Olson camera, by band (paper Sec. 3)."""
     results = {}
     for band in examples.OLSON_BANDS:
-        sensor = examples.olson_sensor(band)
-        scenario = examples.olson_scenario()
-        m = resolve_method(method)
-        s = model.snr(sensor, scenario, m)
-        n = model._niirs_from_snr(sensor, scenario, m, s)  # one radiometry pass for both
-        breakdown = s.drop_vars(["snr", "integration_time", "flags", "spectral_weights"])
-        ds = xr.merge([breakdown, n], compat="override")
+        ds = model.niirs(examples.olson_sensor(band), examples.olson_scenario(), method)
         ds.attrs.update(
             title=f"xbsm: NIIRS and SNR of the Olson camera, {band} band",
             source="xbsm olson (LeMaster & Eismann 2017, Sec. 3)", method=method,
             Conventions="CF-1.8",
         )
+        results[band] = ds
+    return results
+
+
+def write_olson(results: dict[str, xr.Dataset], out: Path) -> None:
+    """One NetCDF file per band in ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    for band, ds in results.items():
         path = out / f"olson_{band}.nc"
         _encode_for_netcdf(ds).to_netcdf(path)
         print(f"wrote {path}")
-        results[band] = ds
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharey=True)
-    for ax, band in zip(axes, results, strict=False):
+
+def draw_olson(results: dict[str, xr.Dataset], out: Path, method: str = "accurate") -> None:
+    """The paper's Figures 2-5 as PNG files in ``out``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    def panels(name, draw, height=4.0):
+        fig, axes = plt.subplots(1, 2, figsize=(11, height), sharey=True)
+        for ax, key in zip(axes, results, strict=False):
+            draw(ax, key)
+        fig.tight_layout()
+        fig.savefig(out / name, dpi=110)
+
+    def niirs_panel(ax, band):
         plot.against_range(results[band].niirs.sel(giqe=3), ax=ax, hue="visibility")
         ax.set_ylim(0, 10)  # the rating scale; flagged values far below it are off the chart
         ax.set_title(f"{band} band: NIIRS (GIQE 3, paper Eq. 4)")
-    fig.tight_layout()
-    fig.savefig(out / "figure2_niirs.png", dpi=110)
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharey=True)
-    for ax, band in zip(axes, results, strict=False):
+    def snr_panel(ax, band):
         plot.against_range(results[band].snr, ax=ax, hue="visibility")
         ax.set_yscale("log")
         ax.set_ylim(1e-2, None)
         ax.set_title(f"{band} band: contrast SNR")
-    fig.tight_layout()
-    fig.savefig(out / "figure3_snr.png", dpi=110)
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
-    for ax, band in zip(axes, results, strict=False):
-        point = results[band].sel(ground_range=20000.0, visibility=5.0)
-        plot.noise_breakdown(point, ax=ax)
+    def noise_panel(ax, band):
+        plot.noise_breakdown(results[band].sel(ground_range=20000.0, visibility=5.0), ax=ax)
         ax.set_xlabel(f"{band} band, 20 km ground range, 5 km visibility")
-    fig.tight_layout()
-    fig.savefig(out / "figure4_noise.png", dpi=110)
+
+    panels("figure2_niirs.png", niirs_panel)
+    panels("figure3_snr.png", snr_panel)
+    panels("figure4_noise.png", noise_panel, height=4.5)
 
     sensor = examples.olson_sensor("red")
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
@@ -99,6 +102,9 @@ def run_olson(out: Path, method: str = "accurate") -> dict[str, xr.Dataset]:
     fig.savefig(out / "figure5_mtf.png", dpi=110)
     plt.close("all")
 
+
+def summarize_olson(results: dict[str, xr.Dataset]) -> None:
+    """Print NIIRS and SNR at three ranges, marking values outside the GIQE calibration."""
     print("NIIRS (GIQE 3 / 4 / 5) at 9 km altitude (* outside the GIQE calibration ranges):")
     for band, ds in results.items():
         for vis in (23.0, 5.0):
@@ -109,6 +115,14 @@ def run_olson(out: Path, method: str = "accurate") -> dict[str, xr.Dataset]:
                       + " / ".join(f"{x:9.2f}{m}" for x, m in zip(point.niirs.values, marks,
                                                                    strict=True))
                       + f"   SNR {float(point.snr):8.2f}")
+
+
+def run_olson(out: Path, method: str = "accurate") -> dict[str, xr.Dataset]:
+    """Compute, write and draw the Olson example; return the per-band datasets."""
+    results = compute_olson(method)
+    write_olson(results, out)
+    draw_olson(results, out, method)
+    summarize_olson(results)
     print(f"figures in {out}")
     return results
 

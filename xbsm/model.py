@@ -10,14 +10,23 @@ import numpy as np
 import xarray as xr
 
 from . import flags as fl
-from . import noise, radiometry
+from . import geometry, metrics, noise, radiometry
 from .atmosphere import band_atmosphere
 from .methods import Method
 from .methods import method as resolve_method
-from .params import check_kind
+from .otf.system import system_components
+from .params import check_inputs
+from .quadrature import edge_nodes, optics_cutoff, undersampled
 
 
-def _drop_scalar_coords(ds: xr.Dataset) -> xr.Dataset:
+def _result(variables: dict, **attrs) -> xr.Dataset:
+    """A result Dataset without scalar coordinates.
+
+    An output that repeats an input swept on a dimension of its own name (``read_noise``
+    swept on ``read_noise``) is left to that coordinate, which holds the same values.
+    """
+    dims = {d for v in variables.values() for d in v.dims}
+    ds = xr.Dataset({k: v for k, v in variables.items() if k not in dims}, attrs=attrs)
     return ds.drop_vars([c for c in ds.coords if ds[c].ndim == 0 and c not in ds.dims])
 
 
@@ -41,7 +50,7 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
     Returns
     -------
     xr.Dataset
-        ``snr`` (after frame stacking), ``snr_frame``, ``integration_time``,
+        ``snr`` (after frame stacking), ``snr_frame``, ``effective_integration_time``,
         ``target_photoelectrons``, ``background_photoelectrons``,
         ``contrast_photoelectrons``, ``well_fill``, every noise term
         (``shot_noise``, ``scene_noise``, ``path_noise``, ``self_emission_noise``,
@@ -50,11 +59,14 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
         spectral photoelectron rate, which weights the OTFs, paper Eq. 3) and
         ``flags``.
     """
-    check_kind(sensor, "sensor", "sensor")
-    check_kind(scenario, "scenario", "scenario")
+    check_inputs(sensor, scenario)
     if targets not in ("giqe", "scenario"):
         raise ValueError(f"targets must be 'giqe' or 'scenario'; got {targets!r}")
-    m = resolve_method(method)
+    return _snr(sensor, scenario, resolve_method(method), targets)
+
+
+def _snr(sensor: xr.Dataset, scenario: xr.Dataset, m: Method, targets: str) -> xr.Dataset:
+    """The SNR chain on validated inputs: atmosphere, radiometry, noise."""
     atm = _band_atmosphere(sensor, scenario, m)
     target, background = radiometry.aperture_radiances(
         atm, scenario, targets, sensor["wavelength_min"], m.constants)
@@ -62,20 +74,18 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
     noise_ = noise.noise_terms(signal, sensor)
     brighter = np.maximum(signal["target_photoelectrons"], signal["background_photoelectrons"])
     flags = fl.set_flag(atm["flags"], "well_fill_limited", signal["well_fill_scale"] < 1.0)
-    out = xr.Dataset({
+    return _result({
         "snr": noise_["snr"],
         "snr_frame": noise_["snr_frame"],
         **{name: signal[name] for name in (
-            "integration_time", "target_photoelectrons", "background_photoelectrons",
+            "effective_integration_time", "target_photoelectrons", "background_photoelectrons",
             "contrast_photoelectrons")},
         "well_fill": (brighter / sensor["max_well"]).assign_attrs(
             units="1", long_name="well fill fraction"),
         **{name: noise_[name] for name in noise_.data_vars if name not in ("snr", "snr_frame")},
         "spectral_weights": signal["spectral_weights"],
         "flags": flags,
-    })
-    out.attrs.update(method=m.name, targets=targets)
-    return _drop_scalar_coords(out)
+    }, method=m.name, targets=targets)
 
 
 def _band_atmosphere(sensor: xr.Dataset, scenario: xr.Dataset, m: Method) -> xr.Dataset:
@@ -112,7 +122,7 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
     xr.Dataset
         ``photoelectrons`` over ``reflectance`` (and the sweep dims), scaled so
         that the brightest reflectance fills the well at most (pyBSM's rule);
-        ``integration_time`` after that scaling; ``spectral_weights``, the
+        ``effective_integration_time`` after that scaling; ``spectral_weights``, the
         spectral photoelectron rate of the brightest target normalised to a
         peak of 1; ``flags`` (``well_fill_limited`` where scaled).
 
@@ -121,8 +131,7 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
     Paper Eq. 1 and 2 with the dark current; the count is linear in
     reflectance (Eq. 1 is).
     """
-    check_kind(sensor, "sensor", "sensor")
-    check_kind(scenario, "scenario", "scenario")
+    check_inputs(sensor, scenario)
     m = resolve_method(method)
     s, k = sensor, m.constants
     if reflectance is None:
@@ -145,27 +154,24 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
     counts = np.minimum(counts * scale, s["max_well"])
     brightest = spectral.isel(reflectance=-1, drop=True)
     flags = fl.set_flag(atm["flags"], "well_fill_limited", scale < 1.0)
-    out = xr.Dataset({
+    return _result({
         "photoelectrons": counts.assign_attrs(units="count", long_name="photoelectrons per pixel"),
-        "integration_time": (integration_time * scale).assign_attrs(
+        "effective_integration_time": (integration_time * scale).assign_attrs(
             units="s", long_name="integration time after the well limit"),
         "spectral_weights": (brightest / brightest.max("wavelength")).assign_attrs(
             units="1", long_name="normalised spectral photoelectron rate"),
         "flags": flags,
-    })
-    out.attrs["method"] = m.name
-    return _drop_scalar_coords(out)
+    }, method=m.name)
 
 
 GIQE_VERSIONS = (3, 4, 5)
 
 
-def _band_curves(sensor: xr.Dataset, wavelength: xr.DataArray):
-    qe = radiometry.resample_spectral(sensor["quantum_efficiency"], wavelength,
-                                      "quantum_efficiency")
-    transmission = radiometry.resample_spectral(sensor["optics_transmission"], wavelength,
-                                                "optics_transmission")
-    return qe, transmission
+def _optics_cutoff(sensor: xr.Dataset, wavelength: xr.DataArray) -> xr.DataArray:
+    """The optics cutoff over the band, from the sensor's QE and transmission curves."""
+    curves = [radiometry.resample_spectral(sensor[name], wavelength, name)
+              for name in ("quantum_efficiency", "optics_transmission")]
+    return optics_cutoff(sensor["aperture_diameter"], wavelength, *curves)
 
 
 def _otf_weights(spectral_weights: xr.DataArray) -> xr.DataArray:
@@ -204,124 +210,134 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
         and 4 use), ``rer_x``, ``rer_y``, ``eho_x``, ``eho_y``, ``rer_giqe5``
         (GIQE 5's (max min^2)^(1/3) of the unfiltered system); ``gsd``
         (geometric mean, image plane), ``gsd_gp`` (GIQE 4 ground plane),
-        ``gsd_w`` (GIQE 5); ``noise_gain``; ``integration_time``;
+        ``gsd_w`` (GIQE 5); ``noise_gain``; ``effective_integration_time``;
         ``slant_range``; ``elevation_angle``; ``coherence_diameter``;
-        ``cutoff_frequency``; ``flags`` over ``giqe``.
+        ``cutoff_frequency``; the SNR breakdown of :func:`snr` (photoelectrons,
+        noise terms, ``snr_frame``, ``well_fill``); ``flags`` over ``giqe``.
 
     Notes
     -----
     The chain: :func:`snr` gives the SNR, the integration time and the
-    spectral weights; :func:`xbsm.otf.system.system_otf` the system OTF on the
+    spectral weights; :func:`xbsm.otf.system.system_components` the system OTF on the
     x and y slices at the nodes of the method's edge-response quadrature;
     :mod:`xbsm.metrics` the edge terms and the GIQE. GIQE 5 uses the system
     without the post-processing filter (as pyBSM's ``niirs5``), GIQE 3 and 4
     with it, with its noise gain.
     """
-    check_kind(sensor, "sensor", "sensor")
-    check_kind(scenario, "scenario", "scenario")
+    check_inputs(sensor, scenario)
     m = resolve_method(method)
-    from .metrics import giqe_calibrations
+    calibration = metrics.giqe_calibrations(calibration)
+    r = _snr(sensor, scenario, m, "giqe")
+    view = _viewing_geometry(sensor, scenario, m)
+    edges = _edge_terms(sensor, scenario, r, view, m)
+    giqe = _giqe_terms(sensor, r, view, edges, m, calibration)
+    flags = giqe["flags"] | r["flags"] | edges["undersampled"]
+    return _result({
+        "niirs": giqe["niirs"],
+        **{name: r[name] for name in r.data_vars if name not in ("spectral_weights", "flags")},
+        **{name: edges[name] for name in edges.data_vars
+           if name not in ("undersampled", "rer_unfiltered_x", "rer_unfiltered_y")},
+        **{name: giqe[name] for name in giqe.data_vars if name not in ("niirs", "flags")},
+        **{name: view[name] for name in ("slant_range", "elevation_angle")},
+        "flags": flags.astype(np.int32).assign_attrs(fl.flag_attrs("NIIRS validity flags")),
+    }, method=m.name)
 
-    cal = giqe_calibrations(calibration)
-    return _niirs_from_snr(sensor, scenario, m, snr(sensor, scenario, m), calibration=cal)
 
-
-def _niirs_from_snr(s: xr.Dataset, sc: xr.Dataset, m: Method, r: xr.Dataset,
-                    calibration=None) -> xr.Dataset:
-    """The NIIRS chain after the radiometry, for a :func:`snr` result ``r`` of (s, sc, m)."""
-    from . import geometry, metrics
-    from .otf.system import cutoff_wavelength, system_otf
-    from .quadrature import edge_nodes, samples_per_oscillation
-
-    slant = geometry.slant_range(sc["ground_range"], sc["altitude"])
+def _viewing_geometry(s: xr.Dataset, sc: xr.Dataset, m: Method) -> xr.Dataset:
+    """Slant range, GIQE elevation angle, IFOVs and GSDs of every scenario."""
+    slant = geometry.slant_range(sc["ground_range"], sc["altitude"], form=m.geometry)
     if m.elevation == "look-down":
-        elevation = geometry.elevation_angle(slant, sc["altitude"])
-    elif m.elevation == "target":
-        elevation = geometry.target_elevation_angle(slant, sc["altitude"])
+        elevation = geometry.elevation_angle(slant, sc["altitude"], form=m.geometry)
     else:
-        raise ValueError(f"elevation must be 'look-down' or 'target'; got {m.elevation!r}")
-
+        elevation = geometry.target_elevation_angle(slant, sc["altitude"], form=m.geometry)
     ifov_x = geometry.ifov(s["pixel_pitch_x"], s["focal_length"])
     ifov_y = geometry.ifov(s["pixel_pitch_y"], s["focal_length"])
+    return xr.Dataset({
+        "slant_range": slant.assign_attrs(units="m", long_name="slant range"),
+        "elevation_angle": elevation.assign_attrs(units="rad", long_name="GIQE elevation angle"),
+        "ifov_x": ifov_x, "ifov_y": ifov_y,
+        "gsd_x": geometry.ground_sample_distance(ifov_x, slant),
+        "gsd_y": geometry.ground_sample_distance(ifov_y, slant),
+    })
+
+
+def _edge_terms(s: xr.Dataset, sc: xr.Dataset, r: xr.Dataset, view: xr.Dataset,
+                m: Method) -> xr.Dataset:
+    """RER and EHO of the system OTF on the x and y slices, at the method's quadrature nodes."""
     weights = r["spectral_weights"]
-    qe, transmission = _band_curves(s, weights["wavelength"])
-    cutoff = s["aperture_diameter"] / cutoff_wavelength(weights["wavelength"], qe, transmission)
+    cutoff = _optics_cutoff(s, weights["wavelength"])
+    ifov_x, ifov_y = view["ifov_x"], view["ifov_y"]
     nodes, quad_weights = edge_nodes(cutoff, ifov_x, ifov_y, **m.edge_quadrature_knobs())
-    otf = system_otf(s, sc, nodes, spectral_weights=_otf_weights(weights),
-                     integration_time=r["integration_time"], slant_range=slant, method=m)
+    otf = system_components(s, sc, nodes, spectral_weights=_otf_weights(weights),
+                            integration_time=r["effective_integration_time"],
+                            slant_range=view["slant_range"], method=m)
+    ifov = xr.concat([ifov_x, ifov_y], dim="orientation").assign_coords(orientation=["x", "y"])
 
-    ifov = xr.concat([ifov_x, ifov_y], dim="orientation").assign_coords(
-        orientation=["x", "y"])
+    def edge(system):
+        return metrics.edge_terms(abs(system) if m.edge_otf == "abs" else system, ifov,
+                                  quad_weights)
 
-    def edges(system):
-        h = abs(system) if m.edge_otf == "abs" else system
-        return metrics.edge_terms(h, ifov, quad_weights)
-
-    filtered = edges(otf["system"])
-    unfiltered = filtered if s["filter_kernel"].shape == (1, 1) else edges(
+    filtered = edge(otf["system"])
+    unfiltered = filtered if s["filter_kernel"].shape == (1, 1) else edge(
         otf["system_unfiltered"])
-    rer_x, rer_y = (filtered["rer"].sel(orientation=o, drop=True) for o in ("x", "y"))
-    eho_x, eho_y = (filtered["eho"].sel(orientation=o, drop=True) for o in ("x", "y"))
-    rer = np.sqrt(rer_x * rer_y)
-    eho = np.sqrt(eho_x * eho_y)
-    gsd_x = geometry.ground_sample_distance(ifov_x, slant)
-    gsd_y = geometry.ground_sample_distance(ifov_y, slant)
-    gsd = np.sqrt(gsd_x * gsd_y)
-    gain = noise.noise_gain(s["filter_kernel"])
-    stacked = r["snr"]
+    terms = {f"{name}_{o}": filtered[name].sel(orientation=o, drop=True).assign_attrs(
+                 units="1", long_name=f"{long} along {o}")
+             for name, long in (("rer", "relative edge response"),
+                                ("eho", "edge height overshoot")) for o in ("x", "y")}
+    coarse = False
+    if m.edge_rule == "uniform_trapezoid":
+        coarse = undersampled(nodes, cutoff, ifov_x, ifov_y, m.undersampling_threshold)
+    return xr.Dataset({
+        **terms,
+        "rer": np.sqrt(terms["rer_x"] * terms["rer_y"]).assign_attrs(
+            units="1", long_name="relative edge response (geometric mean)"),
+        "eho": np.sqrt(terms["eho_x"] * terms["eho_y"]).assign_attrs(
+            units="1", long_name="edge height overshoot (geometric mean)"),
+        "rer_unfiltered_x": unfiltered["rer"].sel(orientation="x", drop=True),
+        "rer_unfiltered_y": unfiltered["rer"].sel(orientation="y", drop=True),
+        "coherence_diameter": otf["coherence_diameter"],
+        "cutoff_frequency": cutoff,
+        "undersampled": fl.set_flag(xr.DataArray(np.int32(0)), "undersampled_grid", coarse),
+    })
 
-    cal = metrics.giqe_calibrations(calibration)
+
+def _giqe_terms(s: xr.Dataset, r: xr.Dataset, view: xr.Dataset, edges: xr.Dataset, m: Method,
+                calibration) -> xr.Dataset:
+    """NIIRS by GIQE 3, 4 and 5 (dim ``giqe``), their flags and their GSD terms."""
+    gsd = np.sqrt(view["gsd_x"] * view["gsd_y"]).assign_attrs(
+        units="m", long_name="ground sample distance (geometric mean)")
+    gain = noise.noise_gain(s["filter_kernel"])
+    elevation = view["elevation_angle"]
+    ifov = xr.concat([view["ifov_x"], view["ifov_y"]], dim="orientation").assign_coords(
+        orientation=["x", "y"])
     # GIQE 5's Q = lambda N / p at the band centre, per orientation (flags only)
     q = metrics.sampling_q(0.5 * (s["wavelength_min"] + s["wavelength_max"]),
                            s["aperture_diameter"], ifov)
-    g3 = metrics.giqe3(rer=rer, gsd=gsd, eho=eho, snr=stacked, noise_gain=gain,
-                       elevation=elevation, calibration=cal[3])
-    g4 = metrics.giqe4(rer=rer, gsd=gsd, eho=eho, snr=stacked, elevation=elevation,
-                       noise_gain=gain, noise_coefficient=m.giqe4_noise_coefficient,
-                       calibration=cal[4])
-    g5 = metrics.giqe5(rer_x=unfiltered["rer"].sel(orientation="x", drop=True),
-                       rer_y=unfiltered["rer"].sel(orientation="y", drop=True),
-                       gsd=gsd_x, snr=stacked, elevation=elevation, calibration=cal[5], q=q)
-    giqe = xr.DataArray(list(GIQE_VERSIONS), dims="giqe", name="giqe",
-                        attrs={"long_name": "GIQE version"})
-    niirs_ = xr.concat([g3["niirs"], g4["niirs"], g5["niirs"]], dim=giqe, coords="minimal",
-                       compat="override")
-    giqe_flags = xr.concat([g3["flags"], g4["flags"], g5["flags"]], dim=giqe,
-                           coords="minimal", compat="override")
+    common = dict(rer=edges["rer"], gsd=gsd, eho=edges["eho"], snr=r["snr"], noise_gain=gain,
+                  elevation=elevation)
+    g3 = metrics.giqe3(**common, calibration=calibration[3])
+    g4 = metrics.giqe4(**common, noise_coefficient=m.giqe4_noise_coefficient,
+                       calibration=calibration[4])
+    g5 = metrics.giqe5(rer_x=edges["rer_unfiltered_x"], rer_y=edges["rer_unfiltered_y"],
+                       gsd=view["gsd_x"], snr=r["snr"], elevation=elevation,
+                       calibration=calibration[5], q=q)
+    versions = xr.DataArray(list(GIQE_VERSIONS), dims="giqe", name="giqe",
+                            attrs={"long_name": "GIQE version"})
 
-    flags = giqe_flags | r["flags"]
-    if m.edge_rule == "uniform_trapezoid":
-        coarse = samples_per_oscillation(nodes, cutoff, ifov_x, ifov_y) < (
-            m.undersampling_threshold)
-        flags = fl.set_flag(flags, "undersampled_grid", coarse)
-    flags = flags.astype(np.int32).assign_attrs(fl.flag_attrs("NIIRS validity flags"))
+    def by_version(name):
+        return xr.concat([g[name] for g in (g3, g4, g5)], dim=versions, coords="minimal",
+                         compat="override")
 
-    def named(da, units, long_name):
-        return da.assign_attrs(units=units, long_name=long_name)
-
-    out = xr.Dataset({
-        "niirs": named(niirs_, "1", "National Imagery Interpretability Rating Scale"),
-        "snr": r["snr"],
-        "rer": named(rer, "1", "relative edge response (geometric mean)"),
-        "rer_x": named(rer_x, "1", "relative edge response along x"),
-        "rer_y": named(rer_y, "1", "relative edge response along y"),
-        "rer_giqe5": named(g5["rer"], "1", "GIQE 5 relative edge response"),
-        "eho": named(eho, "1", "edge height overshoot (geometric mean)"),
-        "eho_x": named(eho_x, "1", "edge height overshoot along x"),
-        "eho_y": named(eho_y, "1", "edge height overshoot along y"),
-        "gsd": named(gsd, "m", "ground sample distance (geometric mean)"),
+    return xr.Dataset({
+        "niirs": by_version("niirs").assign_attrs(
+            units="1", long_name="National Imagery Interpretability Rating Scale"),
+        "flags": by_version("flags"),
+        "rer_giqe5": g5["rer"].assign_attrs(units="1", long_name="GIQE 5 relative edge response"),
+        "gsd": gsd,
         "gsd_gp": g4["gsd_gp"],
-        "gsd_w": named(g5["gsd_w"], "m", "GIQE 5 elevation-weighted GSD"),
+        "gsd_w": g5["gsd_w"].assign_attrs(units="m", long_name="GIQE 5 elevation-weighted GSD"),
         "noise_gain": gain,
-        "integration_time": r["integration_time"],
-        "slant_range": named(slant, "m", "slant range"),
-        "elevation_angle": named(elevation, "rad", "GIQE elevation angle"),
-        "coherence_diameter": otf["coherence_diameter"],
-        "cutoff_frequency": named(cutoff, "cycles/rad", "optics cutoff frequency D/lambda_min"),
-        "flags": flags,
     })
-    out.attrs["method"] = m.name
-    return _drop_scalar_coords(out)
 
 
 def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method="accurate",
@@ -348,26 +364,19 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method=
         ``wavefront``, ``filter``, ``system``, ``system_unfiltered``,
         ``coherence_diameter``; slices carry an ``orientation`` dim (x, y).
     """
-    from . import geometry
-    from .otf.system import cutoff_wavelength
-    from .otf.system import system_otf as _system_otf
-
-    check_kind(sensor, "sensor", "sensor")
-    check_kind(scenario, "scenario", "scenario")
+    check_inputs(sensor, scenario)
     m = resolve_method(method)
-    r = snr(sensor, scenario, m)
+    r = _snr(sensor, scenario, m, "giqe")
     weights = r["spectral_weights"]
     if frequency is None:
-        qe, transmission = _band_curves(sensor, weights["wavelength"])
-        cutoff = float((sensor["aperture_diameter"] / cutoff_wavelength(
-            weights["wavelength"], qe, transmission)).max())
+        cutoff = float(_optics_cutoff(sensor, weights["wavelength"]).max())
         frequency = np.linspace(0.0, cutoff, 201)
     if not isinstance(frequency, xr.DataArray):
         frequency = np.asarray(frequency, dtype=float)
         frequency = xr.DataArray(frequency, dims="frequency", coords={"frequency": frequency},
                                  attrs={"units": "cycles/rad", "long_name": "spatial frequency"})
-    slant = geometry.slant_range(scenario["ground_range"], scenario["altitude"])
-    out = _system_otf(sensor, scenario, frequency, spectral_weights=_otf_weights(weights),
-                      integration_time=r["integration_time"], slant_range=slant, method=m, fy=fy)
-    out.attrs["method"] = m.name
-    return _drop_scalar_coords(out)
+    slant = geometry.slant_range(scenario["ground_range"], scenario["altitude"], form=m.geometry)
+    out = system_components(sensor, scenario, frequency, spectral_weights=_otf_weights(weights),
+                            integration_time=r["effective_integration_time"], slant_range=slant,
+                            method=m, fy=fy)
+    return _result(dict(out.data_vars), method=m.name)

@@ -34,6 +34,9 @@ import xarray as xr
 
 __all__ = [
     "EDGE_RULES",
+    "cutoff_wavelength",
+    "optics_cutoff",
+    "undersampled",
     "aperture_breakpoints",
     "detector_breakpoints",
     "edge_nodes",
@@ -414,3 +417,68 @@ def samples_per_oscillation(nodes, cutoff, ifov_x, ifov_y):
     """
     oscillations = cutoff * np.maximum(ifov_x, ifov_y) * MAX_POSITION
     return (nodes.sizes["frequency"] / oscillations).assign_attrs(units="1")
+
+
+def cutoff_wavelength(wavelength: xr.DataArray, qe, transmission):
+    """Shortest band wavelength that contributes signal (where QE x transmission > 0).
+
+    Parameters
+    ----------
+    wavelength : xr.DataArray
+        Band wavelengths. [m]
+    qe, transmission : xr.DataArray or float
+        Quantum efficiency and optics transmission on ``wavelength``. [1]
+
+    Returns
+    -------
+    xr.DataArray
+        The wavelength setting the optics cutoff D / lambda. [m]
+    """
+    contributes = (xr.DataArray(qe) * xr.DataArray(transmission)) > 0
+    contributes = contributes.broadcast_like(wavelength)
+    out = wavelength.where(contributes).min("wavelength")
+    return out.assign_attrs(units="m", long_name="shortest contributing wavelength")
+
+
+def optics_cutoff(aperture_diameter, wavelength: xr.DataArray, qe, transmission):
+    """Diffraction cutoff of the optics over the band, D / lambda_min, where the band has signal.
+
+    Parameters
+    ----------
+    aperture_diameter : float or xr.DataArray
+        [m]
+    wavelength : xr.DataArray
+        Band wavelengths. [m]
+    qe, transmission : xr.DataArray or float
+        Quantum efficiency and optics transmission on ``wavelength``. [1]
+
+    Returns
+    -------
+    xr.DataArray
+        Upper limit of every frequency integral: the system OTF vanishes beyond it.
+        [cycles/rad]
+    """
+    out = aperture_diameter / cutoff_wavelength(wavelength, qe, transmission)
+    return out.assign_attrs(units="cycles/rad", long_name="optics cutoff frequency D/lambda_min")
+
+
+def undersampled(nodes, cutoff, ifov_x, ifov_y, threshold):
+    """Where a uniform frequency grid has too few samples per oscillation of the edge integrand.
+
+    Parameters
+    ----------
+    nodes : xr.DataArray
+        Frequency nodes on ``frequency``. [cycles/rad]
+    cutoff : float or xr.DataArray
+        [cycles/rad]
+    ifov_x, ifov_y : float or xr.DataArray
+        [rad]
+    threshold : float
+        Fewest samples per period of the integrand at 3 px that the rule resolves. [1]
+
+    Returns
+    -------
+    xr.DataArray
+        Boolean, True where the edge response of a uniform rule may be inaccurate.
+    """
+    return samples_per_oscillation(nodes, cutoff, ifov_x, ifov_y) < threshold

@@ -32,27 +32,6 @@ def _named(da, long_name):
     return da.assign_attrs(units="1", long_name=long_name)
 
 
-def cutoff_wavelength(wavelength: xr.DataArray, qe, transmission):
-    """Shortest band wavelength that contributes signal (where QE x transmission > 0).
-
-    Parameters
-    ----------
-    wavelength : xr.DataArray
-        Band wavelengths. [m]
-    qe, transmission : xr.DataArray or float
-        Quantum efficiency and optics transmission on ``wavelength``. [1]
-
-    Returns
-    -------
-    xr.DataArray
-        The wavelength setting the optics cutoff D / lambda. [m]
-    """
-    contributes = (xr.DataArray(qe) * xr.DataArray(transmission)) > 0
-    contributes = contributes.broadcast_like(wavelength)
-    out = wavelength.where(contributes).min("wavelength")
-    return out.assign_attrs(units="m", long_name="shortest contributing wavelength")
-
-
 def spectral_bins(wavelength: xr.DataArray, weights: xr.DataArray, count: int):
     """Group the band into at most ``count`` contiguous bins for the polychromatic OTFs.
 
@@ -80,9 +59,9 @@ def spectral_bins(wavelength: xr.DataArray, weights: xr.DataArray, count: int):
     return centres.values, summed.assign_coords(wavelength=centres.values)
 
 
-def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.DataArray, *,
-               spectral_weights: xr.DataArray, integration_time, slant_range,
-               method: Method, fy: xr.DataArray | None = None) -> xr.Dataset:
+def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.DataArray, *,
+                      spectral_weights: xr.DataArray, integration_time, slant_range,
+                      method: Method, fy: xr.DataArray | None = None) -> xr.Dataset:
     """Every OTF component of the system and their product (paper Table 1, Eq. 3, Figure 5).
 
     Parameters
@@ -148,14 +127,10 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.DataArray
     r0_ref = turbulence.slant_path_coherence_diameter(
         slant_range, sc["altitude"], 0.0, sc["high_altitude_wind_speed"],
         xr.where(turbulent, cn2, 1.0e-14), path_samples=method.turbulence_path_samples,
-        rule=method.turbulence_path_rule,
+        rule=method.turbulence_path_rule, geometry_form=method.geometry,
     )
-    turb = xr.apply_ufunc(
-        _polychromatic_turbulence_kernel, radial, r0_ref, exposure, sc["platform_speed"],
-        diameter, wl, w,
-        input_core_dims=[[], [], [], [], [], ["wavelength"], ["wavelength"]],
-        dask="parallelized", output_dtypes=[float],
-    )
+    turb = turbulence.polychromatic_turbulence(
+        radial, zero, wl, w, diameter, r0_ref, exposure, sc["platform_speed"])
     turb = xr.where(turbulent, turb, 1.0)
     r0_band = xr.where(
         turbulent, turbulence.band_coherence_diameter(r0_ref, wl, w), np.inf
@@ -176,23 +151,6 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.DataArray
     out["system"] = _named(unfiltered * fil, "system OTF")
     out["coherence_diameter"] = r0_band
     return out
-
-
-def _polychromatic_turbulence_kernel(radial, r0_ref, exposure, speed, diameter, wl, w):
-    """Numpy kernel: weighted sum over the last (wavelength) axis, one wavelength at a time.
-
-    Accumulating wavelength by wavelength keeps memory at one slice of the
-    (frequency x scenario) block instead of materialising the wavelength axis.
-    """
-    total = np.zeros(np.broadcast_shapes(np.shape(radial), np.shape(r0_ref), np.shape(exposure),
-                                         np.shape(speed), np.shape(diameter), np.shape(w)[:-1]))
-    for i in range(np.shape(wl)[-1]):
-        lam = wl[..., i]
-        r0 = turbulence.scale_coherence_diameter(r0_ref, lam)
-        total += w[..., i] * turbulence.wind_blended_turbulence(
-            radial, 0.0, lam, diameter, r0, exposure, speed
-        )
-    return total
 
 
 def _filter(sensor, fx, fy, method: Method):

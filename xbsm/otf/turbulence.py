@@ -128,6 +128,7 @@ def slant_path_coherence_diameter(
     wavelength=REFERENCE_WAVELENGTH,
     path_samples=64,
     rule="gauss-legendre",
+    geometry_form="stable",
 ):
     r"""Spherical-wave coherence diameter on a curved-Earth slant path, Hufnagel-Valley Cn2.
 
@@ -154,6 +155,8 @@ def slant_path_coherence_diameter(
         :math:`u = \sqrt{z/L}`, which smooths the :math:`(z/L)^{5/3}` weight;
         32 nodes are within 1e-12 of a 10^6-sample trapezoid and of 2000
         nodes for paths from 100 m to 300 km (``docs/otf.md``).
+    geometry_form : {"stable", "law-of-cosines"}
+        Formulas of the path heights (:data:`xbsm.geometry.FORMS`).
 
     Returns
     -------
@@ -188,6 +191,7 @@ def slant_path_coherence_diameter(
         slant_range,
         sensor_altitude,
         target_altitude,
+        kwargs={"form": geometry_form},
         dask="parallelized",
         output_dtypes=[float],
     )
@@ -395,9 +399,30 @@ def polychromatic_turbulence(
     here that is :func:`slant_path_coherence_diameter` and the band r0 is
     :func:`band_coherence_diameter`.
     """
-    r0 = scale_coherence_diameter(coherence_diameter, wavelength, reference_wavelength)
-    mono = wind_blended_turbulence(
-        fx, fy, wavelength, aperture_diameter, r0, integration_time, wind_speed
+    _nonnegative("integration_time", integration_time)
+    _nonnegative("wind_speed", wind_speed)
+    weights = weights / weights.sum("wavelength")
+    out = xr.apply_ufunc(
+        _polychromatic_kernel, np.hypot(fx, fy), coherence_diameter, integration_time,
+        wind_speed, aperture_diameter, reference_wavelength, wavelength, weights,
+        input_core_dims=[[], [], [], [], [], [], ["wavelength"], ["wavelength"]],
+        dask="parallelized", output_dtypes=[float],
     )
-    out = spectral_average(mono, weights)
     return _finish(out, polychromatic_turbulence)
+
+
+def _polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, wl, w):
+    """Weighted sum over the last (wavelength) axis, one wavelength at a time (numpy).
+
+    Accumulating wavelength by wavelength keeps memory at one slice of the
+    (frequency x scenario) block instead of materialising the wavelength axis.
+    """
+    shape = np.broadcast_shapes(*(np.shape(a) for a in (radial, r0_ref, exposure, speed,
+                                                         diameter, reference)), np.shape(w)[:-1])
+    total = np.zeros(shape)
+    for i in range(np.shape(wl)[-1]):
+        lam = wl[..., i]
+        r0 = scale_coherence_diameter(r0_ref, lam, reference)
+        total += w[..., i] * wind_blended_turbulence(radial, 0.0, lam, diameter, r0, exposure,
+                                                     speed)
+    return total
