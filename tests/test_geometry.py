@@ -7,8 +7,11 @@ from xbsm.constants import EARTH_RADIUS
 
 
 def test_slant_range_reference_case():
-    # pybsm_test_cases.md D25: curved_earth_slant_range(0, 1, 1) = sqrt(2) (pyBSM 0.16.1)
-    assert geometry.slant_range(1.0, 1.0, 0.0) == pytest.approx(1.4142135623730951, rel=1e-12)
+    # pybsm_test_cases.md D25: pyBSM 0.16.1's curved_earth_slant_range(0, 1, 1) gives
+    # sqrt(2) = 1.4142135623730951, but its law of cosines cancels 13 digits there; the
+    # exact value (50-digit mpmath, same formula) is sqrt(2 + 1/R_e) = 1.41421361780493704
+    assert geometry.slant_range(1.0, 1.0, 0.0) == pytest.approx(1.414213617804937, rel=1e-14)
+    assert geometry.slant_range(1.0, 1.0, 0.0) == pytest.approx(1.4142135623730951, rel=1e-7)
 
 
 def test_nadir_angle_reference_case():
@@ -18,9 +21,24 @@ def test_nadir_angle_reference_case():
 
 def test_olson_slant_range_and_elevation():
     # pybsm_test_cases.md A5 (pyBSM 0.16.1): 9 km altitude, 20 km ground range
+    # 50-digit mpmath of the same geometry: 21944.568747966005055 m and 0.42415759925679397 rad
+    # (pyBSM's rounded law of cosines and arccos: 21944.568747898647 and 0.42415759925816854)
     r = geometry.slant_range(20000.0, 9000.0)
-    assert r == pytest.approx(21944.568747898647, rel=1e-13)
+    assert r == pytest.approx(21944.568747966005, rel=1e-15)
+    assert r == pytest.approx(21944.568747898647, rel=1e-11)
+    assert geometry.elevation_angle(r, 9000.0) == pytest.approx(0.42415759925679397, rel=1e-14)
     assert geometry.elevation_angle(r, 9000.0) == pytest.approx(0.42415759925816854, rel=1e-9)
+
+
+def test_nadir_angle_is_exact_near_nadir():
+    # 0.1 m from nadir at 9 km: pyBSM's arccos gives 1.388e-5 rad; the exact angle for this
+    # (double-rounded) slant range is 1.1111113585886088e-5 (50-digit mpmath), and
+    # 1.1111111110652896e-5 for the exact slant range
+    r = geometry.slant_range(0.1, 9000.0)
+    assert geometry.nadir_angle(r, 9000.0) == pytest.approx(1.1111113585886088e-5, rel=1e-12)
+    assert geometry.nadir_angle(r, 9000.0) == pytest.approx(1.1111111110652896e-5, rel=1e-6)
+    assert float(geometry.target_elevation_angle(r, 9000.0)) == pytest.approx(
+        np.pi / 2 - 1.1111113585886088e-5 - 0.1 / EARTH_RADIUS, rel=1e-14)
 
 
 def test_nadir_look_is_vertical_without_nan():

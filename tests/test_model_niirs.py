@@ -126,7 +126,7 @@ REFERENCE_CASES = {
            {"slant_range": (21944.568747898647, 1e-12), "niirs3": 8.180362337723714,
             "niirs4": 6.990223083421799, "niirs5": 8.252057802116985,
             "rer": 0.33209462427356395, "eho": 0.8308998136005951,
-            "snr": 45.62499378465095, "integration_time": 0.016394490514314956,
+            "snr": 45.62499378465095, "effective_integration_time": 0.016394490514314956,
             "gsd_w": (0.05479621447912214, 1e-12)}),
     # A6 [C]: Olson red band, ihaze 2, 9 km altitude, nadir
     "A6": (olson_compat([0.50e-6, 0.66e-6], 0.8),

@@ -16,7 +16,7 @@ CASES, OUTPUTS = load_cases()
 # niirs(...).snr.*, i.e. photon_detector_SNR on the GIQE target, plus niirs' path/scene noise)
 PARITY = {
     "snr_frame": "snr",
-    "integration_time": "int_time",
+    "effective_integration_time": "int_time",
     "target_photoelectrons": "tgt_n",
     "background_photoelectrons": "bkg_n",
     "contrast_photoelectrons": "contrast_signal",
@@ -63,7 +63,7 @@ def test_snr_matches_pybsm_with_pybsm_method(index):
 def test_snr_with_scenario_targets_matches_photon_detector_snr(index):
     sensor, scenario = datasets(CASES[index])
     result = xbsm.snr(sensor, scenario, method="pybsm", targets="scenario")
-    for ours, theirs in (("snr_frame", "snr"), ("integration_time", "int_time"),
+    for ours, theirs in (("snr_frame", "snr"), ("effective_integration_time", "int_time"),
                          ("target_photoelectrons", "tgt_n"),
                          ("background_photoelectrons", "bkg_n")):
         assert relative_error(result[ours], OUTPUTS[f"scenario_{theirs}"][index]) <= 1e-9

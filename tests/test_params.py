@@ -34,7 +34,7 @@ def test_detector_height_default_keeps_the_fill_factor():
 @pytest.mark.parametrize(
     "kw, name, allowed",
     [
-        ({"aperture_diameter": -0.1}, "aperture_diameter", "(0, inf] m"),
+        ({"aperture_diameter": -0.1}, "aperture_diameter", "(0, inf) m"),
         ({"wavelength_min": 0.2e-6}, "wavelength_min", "[3e-07, 1.4e-05) m"),
         ({"wavelength_max": 15e-6}, "wavelength_max", "(3e-07, 1.4e-05] m"),
         ({"max_well_fill": 1.2}, "max_well_fill", "(0, 1] 1"),

@@ -28,6 +28,7 @@ KNOB_CHOICES = MappingProxyType({
     "filter_otf": ("pybsm", "dtft"),
     "turbulence_path_rule": ("trapezoid", "gauss-legendre"),
     "elevation": ("look-down", "target"),
+    "geometry": ("stable", "law-of-cosines"),
 })
 #: Allowed range [low, high] of every whole-number knob. The upper limits guard memory:
 #: each bounds an array the knob sizes (frequency nodes, path samples, wavelengths) well
@@ -120,6 +121,10 @@ class Method:
     """GIQE elevation angle: "look-down" (pyBSM: pi/2 minus the nadir angle at the sensor)
     or "target" (elevation of the sensor above the target's horizon, which is what
     projects the GSD onto the ground; smaller by the central angle)."""
+    geometry: str
+    """Curved-earth triangle: "law-of-cosines" (pyBSM: sqrt(a^2 + c^2 - 2ac cos) and arccos,
+    which lose up to half their digits near nadir and on short paths) or "stable"
+    (half-angle and atan2 forms, exact to rounding)."""
     undersampling_threshold: float
     """Flag ``undersampled_grid`` when a uniform edge rule has fewer samples than this per
     period of sin(2 pi f ifov x) at x = 3 px. 2.0 flags wherever the NIIRS error of the
@@ -172,6 +177,7 @@ _PRESETS: dict[str, Method] = {
         turbulence_path_samples=10000,
         turbulence_path_rule="trapezoid",
         elevation="look-down",
+        geometry="law-of-cosines",
         undersampling_threshold=2.0,
     ),
     "accurate": Method(
@@ -191,6 +197,7 @@ _PRESETS: dict[str, Method] = {
         turbulence_path_samples=64,
         turbulence_path_rule="gauss-legendre",
         elevation="target",
+        geometry="stable",
         undersampling_threshold=2.0,
     ),
 }

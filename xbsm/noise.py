@@ -163,7 +163,7 @@ def noise_terms(signal: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
     background, without the sensor's own irradiance, less the path term.
     """
     s = sensor
-    exposure = signal["integration_time"] * s["tdi_stages"]
+    exposure = signal["effective_integration_time"] * s["tdi_stages"]
     brighter = np.maximum(signal["target_photoelectrons"], signal["background_photoelectrons"])
     quantization = quantization_noise(s["max_well"], s["bit_depth"])
     total = total_noise(brighter, quantization, s["read_noise"], s["other_noise"])
@@ -184,7 +184,8 @@ def noise_terms(signal: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
         "self_emission_noise": _named(np.sqrt(signal["sensor_rate"] * exposure), rms,
                                       "self-emission and stray-light noise"),
         "dark_current_noise": _named(
-            dark_current_noise(s["dark_current"], signal["integration_time"], s["tdi_stages"]),
+            dark_current_noise(s["dark_current"], signal["effective_integration_time"],
+                               s["tdi_stages"]),
             rms, "dark current noise"),
         "quantization_noise": _named(xr.DataArray(quantization), rms, "quantization noise"),
         "read_noise": _named(s["read_noise"], rms, "read noise"),

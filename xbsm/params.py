@@ -23,6 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from . import units
+
 WAVELENGTH_MIN = 0.3e-6
 """Shortest wavelength of the atmosphere database. [m]"""
 WAVELENGTH_MAX = 14.0e-6
@@ -45,6 +47,13 @@ class Spec:
     high: float = math.inf
     low_open: bool = False
     high_open: bool = False
+
+    def __post_init__(self):
+        # an unbounded end is open: inf is never a valid parameter value
+        if self.high == math.inf:
+            object.__setattr__(self, "high_open", True)
+        if self.low == -math.inf:
+            object.__setattr__(self, "low_open", True)
 
     def describe(self) -> str:
         """Human-readable allowed interval, e.g. ``(0, inf) m``."""
@@ -142,10 +151,33 @@ SCENARIO_SPECS: dict[str, Spec] = {
 }
 
 
+#: Dimension names xbsm uses itself; a sweep dimension may not take one of them (it would
+#: merge silently with xbsm's own axis), nor the name of another parameter.
+RESERVED_DIMS = (
+    "wavelength", "frequency", "orientation", "giqe", "fx", "fy", "x", "y", "component",
+    "kernel_x", "kernel_y", "reflectance", "path",
+    *(f"{name}_wavelength" for name in ("optics_transmission", "quantum_efficiency",
+                                          "stray_irradiance")),
+)
+
+
+def _check_dims(name: str, value: xr.DataArray, allowed=()) -> None:
+    """Refuse sweep dimensions that would collide with xbsm's own or another parameter."""
+    for dim in value.dims:
+        if dim in allowed:
+            continue
+        if dim in RESERVED_DIMS:
+            raise ValueError(
+                f"{name} is swept on dimension {dim!r}, a name xbsm uses itself; rename it "
+                f"(reserved: {', '.join(RESERVED_DIMS)})")
+        if dim != name and (dim in SENSOR_SPECS or dim in SCENARIO_SPECS):
+            raise ValueError(
+                f"{name} is swept on dimension {dim!r}, the name of another parameter; "
+                f"name the dimension {name!r} or anything that is not a parameter")
+
+
 def _raise(name: str, spec: Spec, bad) -> None:
-    raise ValueError(
-        f"{name} must lie in {spec.describe()}; got {bad!r}"
-    )
+    raise ValueError(f"{name} must lie in {spec.describe()}; got {float(bad)!r}")
 
 
 def _lazy_check(block, name, spec):
@@ -155,20 +187,48 @@ def _lazy_check(block, name, spec):
     return block
 
 
-def _validated(name: str, value, spec: Spec) -> xr.DataArray:
-    """Return ``value`` as a DataArray with attrs, raising if it is out of range."""
+def _as_float64(name: str, value, spec: Spec):
+    """``value`` as float64 (promoting integers and float16/32); a clear error otherwise."""
+    kind = np.asarray(value).dtype.kind if not isinstance(value, xr.DataArray) else value.dtype.kind
+    if kind == "b" or kind not in "iuf":
+        raise ValueError(
+            f"{name} must be a real number or an xr.DataArray of real numbers "
+            f"[{spec.units}]; got {value!r:.80}")
+    if isinstance(value, xr.DataArray):
+        return value if value.dtype == np.float64 else value.astype(np.float64)
+    return np.asarray(value, dtype=np.float64)
+
+
+def _in_si(name: str, value: xr.DataArray, spec: Spec) -> xr.DataArray:
+    """Convert an input whose ``units`` attribute names a multiple of the SI unit."""
+    given = value.attrs.get("units")
+    if given is None or str(given).strip() in (spec.units, ""):
+        return value
+    factor = units.si_factor(str(given).strip(), spec.units)
+    if factor is None:
+        raise ValueError(
+            f"{name} has units {given!r}; xbsm expects {spec.units!r} "
+            f"(or one of {', '.join(units.accepted(spec.units))}), converted on input")
+    return value * factor
+
+
+def _validated(name: str, value, spec: Spec, allowed_dims=()) -> xr.DataArray:
+    """Return ``value`` as a float64 DataArray in SI with attrs, raising if out of range."""
     if isinstance(value, xr.Variable):
         value = xr.DataArray(value)
     if isinstance(value, xr.DataArray):
-        out = value.copy(deep=False)
+        out = _in_si(name, _as_float64(name, value, spec), spec).copy(deep=False)
+        if out.size == 0:
+            raise ValueError(f"{name} is an empty sweep (dims {out.dims}); give at least one value")
     else:
-        array = np.asarray(value, dtype=float)
+        array = _as_float64(name, value, spec)
         if array.ndim:
             raise ValueError(
                 f"{name} must be a scalar or an xr.DataArray with named dimensions; "
                 f"got an unlabelled array of shape {array.shape}"
             )
         out = xr.DataArray(array)
+    _check_dims(name, out, allowed_dims)
     if out.chunks is not None:
         import dask.array as dsa
 
@@ -183,17 +243,38 @@ def _validated(name: str, value, spec: Spec) -> xr.DataArray:
 
 def _spectral(name: str, value, spec: Spec) -> xr.DataArray:
     """Validate a spectral parameter and move it onto its own wavelength dim."""
-    if not isinstance(value, xr.DataArray):
-        return _validated(name, value, spec)
-    if "wavelength" not in value.dims:
+    if not isinstance(value, xr.DataArray) or "wavelength" not in value.dims:
         return _validated(name, value, spec)
     if "wavelength" not in value.coords:
         raise ValueError(f"{name} needs a 'wavelength' coordinate [m]")
     wl = np.asarray(value["wavelength"].values, dtype=float)
-    if wl.size < 1 or np.any(np.diff(wl) <= 0):
-        raise ValueError(f"{name}: its wavelength coordinate must increase strictly")
-    out = _validated(name, value, spec)
-    return out.rename(wavelength=f"{name}_wavelength")
+    if wl.size < 1 or np.any(np.diff(wl) <= 0) or not np.all(np.isfinite(wl)):
+        raise ValueError(f"{name}: its wavelength coordinate must be finite and increase strictly")
+    private = f"{name}_wavelength"
+    return _validated(name, value.rename(wavelength=private), spec, allowed_dims=(private,))
+
+
+def _check_band_overlap(name: str, curve: xr.DataArray, low: float, high: float) -> None:
+    """Refuse a spectral curve that gives no signal in the band [low, high].
+
+    The curve must reach into the band and, for QE and transmission, be non-zero
+    somewhere in it; a curve that covers part of the band is legitimate (zero outside
+    its own range).
+    """
+    dim = f"{name}_wavelength"
+    if dim in curve.dims:
+        wl = curve[dim].values
+        if wl[-1] < low or wl[0] > high:
+            hint = (" Are its wavelengths in micrometres or nanometres? xbsm uses metres."
+                    if wl[-1] > 1e-3 or wl[0] > 1e-3 else "")
+            raise ValueError(
+                f"{name} is given over [{wl[0]:g}, {wl[-1]:g}] m, outside the band "
+                f"[wavelength_min, wavelength_max] = [{low:g}, {high:g}] m.{hint}")
+        inside = curve.where((curve[dim] >= low) & (curve[dim] <= high), drop=True)
+    else:
+        inside = curve
+    if name != "stray_irradiance" and inside.chunks is None and not bool((inside > 0).any()):
+        raise ValueError(f"{name} is zero over the whole band [{low:g}, {high:g}] m: no signal")
 
 
 def _finish(values: dict[str, xr.DataArray], kind: str) -> xr.Dataset:
@@ -307,8 +388,12 @@ def sensor(
         One variable per parameter, each with ``units`` and ``long_name``.
     """
     given = dict(locals())
+    # validate what the defaults are derived from first, so an error names the input
+    for name in ("pixel_pitch_x", "pixel_pitch_y", "detector_width_x", "aperture_diameter"):
+        if given[name] is not None:
+            given[name] = _validated(name, given[name], SENSOR_SPECS[name])
     if pixel_pitch_y is None:
-        given["pixel_pitch_y"] = pixel_pitch_x
+        given["pixel_pitch_y"] = given["pixel_pitch_x"]
     if detector_width_x is None:
         given["detector_width_x"] = given["pixel_pitch_x"]
     if detector_width_y is None:
@@ -318,7 +403,7 @@ def sensor(
     for axis in ("x", "y"):
         key = f"wavefront_correlation_length_{axis}"
         if given[key] is None:
-            given[key] = aperture_diameter
+            given[key] = given["aperture_diameter"]
     kernel = given.pop("filter_kernel")
     values = {}
     for name, spec in SENSOR_SPECS.items():
@@ -334,6 +419,9 @@ def sensor(
             "wavelength_min must be smaller than wavelength_max; got "
             f"{float(values['wavelength_min'])!r} >= {float(values['wavelength_max'])!r}"
         )
+    low, high = float(values["wavelength_min"]), float(values["wavelength_max"])
+    for name in SPECTRAL:
+        _check_band_overlap(name, values[name], low, high)
     values["filter_kernel"] = _kernel(kernel)
     return _finish(values, "sensor")
 
@@ -423,3 +511,43 @@ def check_kind(ds: xr.Dataset, kind: str, argument: str) -> None:
             f"{argument} must be the dataset returned by xbsm.{kind}(...) "
             f"or xbsm.pybsm_compat.{kind}(...)"
         )
+
+
+def check_inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> None:
+    """Validate a sensor and a scenario again where a model call receives them.
+
+    Datasets may have been edited after :func:`sensor` / :func:`scenario` (e.g.
+    ``s.assign(aperture_diameter=-0.1)``): every parameter is checked against its
+    range again (eager values; dask values are checked when computed), and the two
+    datasets' shared dimensions must agree in size and coordinates.
+
+    Raises
+    ------
+    ValueError
+        Naming the parameter and its allowed range, or the conflicting dimension.
+    """
+    check_kind(sensor, "sensor", "sensor")
+    check_kind(scenario, "scenario", "scenario")
+    for kind, ds, specs in (("sensor", sensor, SENSOR_SPECS),
+                            ("scenario", scenario, SCENARIO_SPECS)):
+        for name, spec in specs.items():
+            if name not in ds:
+                raise ValueError(f"the {kind} dataset has no parameter {name!r}; "
+                                 f"make it with xbsm.{kind}(...)")
+            value = ds[name]
+            _check_dims(name, value, allowed=(f"{name}_wavelength",))
+            if value.chunks is None:
+                mask = spec.violated(value.values)
+                if np.any(mask):
+                    _raise(name, spec, value.values[mask].ravel()[0])
+    for dim in set(sensor.dims) & set(scenario.dims):
+        if sensor.sizes[dim] != scenario.sizes[dim]:
+            raise ValueError(
+                f"sensor and scenario both sweep dimension {dim!r} but with "
+                f"{sensor.sizes[dim]} and {scenario.sizes[dim]} values; give them one length "
+                "(one sweep) or different names (a product of two sweeps)")
+        if dim in sensor.indexes and dim in scenario.indexes and not (
+                sensor.indexes[dim].equals(scenario.indexes[dim])):
+            raise ValueError(
+                f"sensor and scenario both sweep dimension {dim!r} with different coordinate "
+                "values; give them the same coordinates or different dimension names")

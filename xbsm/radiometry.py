@@ -536,7 +536,7 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
     -------
     xr.Dataset
         ``target_photoelectrons``, ``background_photoelectrons``,
-        ``contrast_photoelectrons`` [count]; ``integration_time`` after the
+        ``contrast_photoelectrons`` [count]; ``effective_integration_time`` after the
         well-fill limit [s]; ``well_fill_scale`` [1]; ``spectral_weights``, the
         target's spectral photoelectron rate [s-1 m-1]; and the band photoelectron
         rates the noise terms need: ``path_rate``, ``target_scene_rate``,
@@ -569,7 +569,7 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
         "background_photoelectrons": _named(n_background, "count", "background photoelectrons"),
         "contrast_photoelectrons": _named(n_target - n_background, "count",
                                           "contrast photoelectrons"),
-        "integration_time": _named(scale * s["integration_time"], "s",
+        "effective_integration_time": _named(scale * s["integration_time"], "s",
                                    "integration time after the well-fill limit"),
         "well_fill_scale": scale,
         "spectral_weights": _named(spectral, "s-1 m-1", "target spectral photoelectron rate"),
