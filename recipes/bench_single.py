@@ -1,0 +1,641 @@
+"""Benchmark: one scenario per call, xbsm against pyBSM 0.16.1, side by side in one run.
+
+What a notebook user, an optimizer or a Monte Carlo loop pays per call. Three
+single (scalar) scenarios:
+
+- ``olson_red``: the paper's Olson camera (Table 2), red band, 9 km altitude,
+  20 km ground range, 5 km visibility (xbsm: ``xbsm.examples.olson_sensor("red")``
+  and ``olson_scenario(ground_range=20000.0, visibility=5.0)``; pyBSM: the same
+  camera as ``recipes/bench_niirs.py`` builds it);
+- ``mwir_narrow``: fixture case ``case117_mwir_narrow`` of
+  ``tests/fixtures/pybsm_cases.json`` (3.6-4.2 um, cold filter, 9 km altitude,
+  24 km ground range, turbulence, sharpening kernel, 4 stacked frames);
+- ``vis_nadir``: fixture case ``VIS`` (pyBSM's default sensor in 0.50-0.66 um,
+  9 km altitude, nadir, 23 km visibility).
+
+pyBSM (its own environment, ``NUMBA_NUM_THREADS=1``, a child process as in
+``recipes/_pybsm_runner.py``) times ``metrics.niirs`` (GIQE 3, 4),
+``metrics.niirs5`` (GIQE 5) and its SNR path (``load_database_atmosphere_no_interp``
++ ``giqe_radiance`` + ``photon_detector_SNR``, as ``_pybsm_runner.py`` and
+``bench_snr.py`` time it). xbsm times ``xbsm.niirs(s, sc)`` (GIQE 3, 4, 5 at
+once) and ``xbsm.snr(s, sc)`` for ``method="pybsm"``, ``"accurate"`` and
+``"fast"``. Each is timed two ways: (a) the call alone on prebuilt inputs
+(xbsm ``sensor``/``scenario`` datasets; pyBSM ``Sensor``/``Scenario``
+objects), (b) building the inputs and calling. Every timing is ``--calls``
+single calls after 2 warm-up calls; the median, quartiles, min and max are
+recorded. The ratio printed is pyBSM's median over xbsm's median, call alone.
+The two alternate scenario by scenario (pyBSM's child process, then xbsm), so
+that both see about the same machine load; the load average is recorded at
+each step.
+
+Then one xbsm ``niirs`` call per method on ``olson_red`` runs under cProfile;
+its time is attributed to the innermost xbsm module on the call stack
+(``atmosphere``, ``radiometry``, ``noise``, ``otf.*``, ``quadrature``,
+``metrics``, ``model``, ``params``, ...), split into that module's own code
+with the numpy/scipy it calls directly, and "xarray overhead": time spent in
+xarray (and whatever xarray calls) below that module and above any xbsm
+kernel. cProfile records only caller-callee pairs, so time two or more levels
+below an xbsm function is shared among callers in proportion to each pair's
+cumulative time (gprof's rule); a second, exact pass (``sys.setprofile``,
+walking the stack at every event) gives the same shares as a check. Both
+profilers slow the call down; the shares, not the profiled times, are the
+result.
+
+Writes ``docs/benchmarks/bench_single.json`` (machine, load average at start
+and end, versions, commit, every timing and the profile); ``docs/benchmarks.md``
+quotes it. Run from the repository root with the project environment;
+pyBSM's own environment is made on first use (see ``recipes/README.md``)::
+
+    .venv/bin/python recipes/bench_single.py [--calls 20]
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import json
+import os
+import platform
+import pstats
+import statistics
+import subprocess
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+from _pybsm_env import missing_pybsm_message
+from _pybsm_runner import pybsm_python
+
+import xbsm
+from xbsm.examples import olson_scenario, olson_sensor
+
+ROOT = Path(__file__).resolve().parent.parent
+DOCS = ROOT / "docs"
+sys.path.insert(0, str(ROOT / "tests"))
+import pybsm_cases  # noqa: E402  (tests/pybsm_cases.py: fixture case -> xbsm datasets)
+
+METHODS = ("pybsm", "accurate", "fast")
+WARMUP = 2
+PROFILE_SCENARIO = "olson_red"
+
+CHILD = r'''
+import json, sys, time
+from importlib.metadata import version
+import numpy as np
+from pybsm.simulation import Sensor, Scenario
+from pybsm.metrics import functional as metrics
+from pybsm import radiance, utils
+
+job = json.load(sys.stdin)
+
+def build(sensor_kw, scenario_kw):
+    kw = dict(sensor_kw)
+    post = kw.pop("post", {})
+    for key in ("opt_trans_wavelengths", "qe", "qe_wavelengths"):
+        if key in kw:
+            kw[key] = np.asarray(kw[key], dtype=float)
+    s = Sensor(**kw)
+    for key, value in post.items():
+        setattr(s, key, np.asarray(value, dtype=float) if isinstance(value, list) else value)
+    return s, Scenario(**scenario_kw)
+
+def snr(s, sc, interp):
+    load = utils.load_database_atmosphere if interp else utils.load_database_atmosphere_no_interp
+    atm = load(altitude=sc.altitude, ground_range=sc.ground_range, ihaze=sc.ihaze)
+    atm = atm[atm[:, 0] >= s.opt_trans_wavelengths[0], :]
+    atm = atm[atm[:, 0] <= s.opt_trans_wavelengths[-1], :]
+    emissive = int(s.opt_trans_wavelengths[0] >= 2.9e-6)
+    tgt, bkg = radiance.giqe_radiance(atm=atm, is_emissive=emissive)
+    return [float(radiance.photon_detector_SNR(
+        sensor=s, radiance_wavelengths=atm[:, 0], target_radiance=tgt,
+        background_radiance=bkg).snr)]
+
+def niirs(s, sc, interp):
+    n = metrics.niirs(sensor=s, scenario=sc, interp=interp)
+    return [float(n.niirs), float(n.niirs_4)]
+
+def niirs5(s, sc, interp):
+    return [float(metrics.niirs5(sensor=s, scenario=sc, interp=interp).niirs)]
+
+def timed(fn, calls, warmup):
+    for _ in range(warmup):
+        fn()
+    times = []
+    for _ in range(calls):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return times
+
+out = {"versions": {p: version(p) for p in ("pybsm", "numpy", "scipy", "numba")},
+       "python": sys.version.split()[0], "scenarios": {}}
+for case in job["scenarios"]:
+    kw = (case["sensor"], case["scenario"])
+    interp = case["interp"]
+    rows = {}
+    for name, fn in (("niirs", niirs), ("niirs5", niirs5), ("snr", snr)):
+        # pyBSM's niirs writes the GIQE target into the Scenario; every call writes the same
+        s, sc = build(*kw)
+        call = timed(lambda: fn(s, sc, interp), job["calls"], job["warmup"])
+        build_call = timed(lambda: fn(*build(*kw), interp), job["calls"], job["warmup"])
+        rows[name] = {"call": call, "build_call": build_call, "values": fn(*build(*kw), interp)}
+    out["scenarios"][case["name"]] = rows
+json.dump(out, sys.stdout)
+'''
+
+
+# ---------------------------------------------------------------- scenarios
+
+def fixture_case(name):
+    cases = json.loads((ROOT / "tests" / "fixtures" / "pybsm_cases.json").read_text())
+    (case,) = [c for c in cases if c["sensor"]["name"] == name]
+    return case
+
+
+def olson_pybsm():
+    """The Olson red camera at 20 km, 5 km visibility, as bench_niirs.py gives it to pyBSM."""
+    from bench_niirs import pybsm_cases as olson_cases
+
+    (case,) = [c for c in olson_cases() if c["band"] == "red" and c["scenario"]["ihaze"] == 2
+               and c["scenario"]["ground_range"] == 20000.0]
+    return {"sensor": case["sensor"], "scenario": case["scenario"], "interp": False}
+
+
+def scenarios():
+    """name -> (description, xbsm builder, pyBSM keywords in the runner's format)."""
+    out = {"olson_red": (
+        "Olson camera (paper Table 2), red band, 9 km altitude, 20 km ground range, "
+        "5 km visibility",
+        lambda: (olson_sensor("red"), olson_scenario(ground_range=20000.0, visibility=5.0)),
+        olson_pybsm())}
+    for name, fixture, text in (
+            ("mwir_narrow", "case117_mwir_narrow",
+             "fixture case117_mwir_narrow: 3.6-4.2 um, 9 km altitude, 24 km ground range, "
+             "23 km visibility, turbulence, sharpening kernel, 4 frames"),
+            ("vis_nadir", "VIS", "fixture VIS: pyBSM's default sensor in 0.50-0.66 um, "
+                                 "9 km altitude, nadir, 23 km visibility")):
+        case = fixture_case(fixture)
+        out[name] = (text, lambda case=case: pybsm_cases.datasets(case), {
+            "sensor": dict(case["sensor"], post=case["post"]),
+            "scenario": case["scenario"], "interp": bool(case.get("interp", False))})
+    return out
+
+
+# ---------------------------------------------------------------- timing
+
+def summary(times):
+    q1, q2, q3 = statistics.quantiles(times, n=4) if len(times) > 1 else (times[0],) * 3
+    return {"median_ms": 1e3 * statistics.median(times), "q1_ms": 1e3 * q1, "q3_ms": 1e3 * q3,
+            "min_ms": 1e3 * min(times), "max_ms": 1e3 * max(times), "calls": len(times)}
+
+
+def timed(fn, calls):
+    for _ in range(WARMUP):
+        fn()
+    times = []
+    for _ in range(calls):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return times
+
+
+def run_pybsm_single(cases, calls):
+    """Time pyBSM on each case in its own process (as _pybsm_runner.run_pybsm does)."""
+    env = dict(os.environ, NUMBA_NUM_THREADS="1", PYTHONWARNINGS="ignore")
+    python = pybsm_python()
+    job = {"calls": calls, "warmup": WARMUP,
+           "scenarios": [dict(kw, name=name) for name, kw in cases.items()]}
+    proc = subprocess.run([python, "-c", CHILD], input=json.dumps(job), capture_output=True,
+                          text=True, env=env)
+    if proc.returncode:
+        if "No module named 'pybsm" in proc.stderr:
+            raise SystemExit(missing_pybsm_message(python))
+        sys.stderr.write(proc.stderr)
+        proc.check_returncode()
+    return json.loads(proc.stdout)
+
+
+def time_xbsm(build, calls):
+    s, sc = build()
+    out = {}
+    for func in ("niirs", "snr"):
+        fn = getattr(xbsm, func)
+        for method in METHODS:
+            call = timed(lambda fn=fn, method=method: fn(s, sc, method=method), calls)
+            build_call = timed(lambda fn=fn, method=method: fn(*build(), method=method), calls)
+            out[f"{func}/{method}"] = {"call": summary(call), "build_call": summary(build_call)}
+    return out
+
+
+def agreement(build, pybsm_values):
+    """|NIIRS difference| (GIQE 3, 4, 5) and relative SNR difference from pyBSM, per method."""
+    s, sc = build()
+    theirs = pybsm_values["niirs"]["values"] + pybsm_values["niirs5"]["values"]
+    snr_theirs = pybsm_values["snr"]["values"][0]
+    out = {}
+    for method in METHODS:
+        ours = xbsm.niirs(s, sc, method=method)["niirs"].values
+        snr_ours = float(xbsm.snr(s, sc, method=method)["snr_frame"])
+        out[method] = {
+            "niirs_xbsm": ours.tolist(), "niirs_pybsm": theirs,
+            "abs_niirs_difference": [abs(float(a) - b) for a, b in zip(ours, theirs,
+                                                                         strict=True)],
+            "snr_xbsm": snr_ours, "snr_pybsm": snr_theirs,
+            "relative_snr_difference": abs(snr_ours - snr_theirs) / max(abs(snr_theirs), 1.0),
+        }
+    return out
+
+
+# ---------------------------------------------------------------- profile
+
+XBSM_DIR = Path(xbsm.__file__).resolve().parent
+XARRAY_DIR = Path(xr.__file__).resolve().parent
+
+
+def _under(filename, folder):
+    try:
+        Path(filename).resolve().relative_to(folder)
+    except (ValueError, OSError):
+        return False
+    return True
+
+
+def short_name(func):
+    """'package/module.py:line(name)' without the machine's folders."""
+    filename, line, name = func
+    if filename.startswith(("~", "<")):
+        return name
+    path = Path(filename).resolve()
+    for base in sorted({XBSM_DIR.parent, XARRAY_DIR.parent, *map(Path, sys.path)},
+                       key=lambda p: len(str(p)), reverse=True):
+        try:
+            return f"{path.relative_to(Path(base).resolve())}:{line}({name})"
+        except (ValueError, OSError):
+            continue
+    return f"{path.name}:{line}({name})"
+
+
+def attribute(stats):
+    """Self time of every function -> {(innermost xbsm module, through xarray?): seconds}.
+
+    The time of a function outside xbsm climbs the caller graph until it reaches an xbsm
+    function: at the first step in proportion to the self time recorded for each caller
+    pair, above that in proportion to each pair's cumulative time (cProfile keeps no
+    deeper stacks). "Through xarray" means an xarray function was passed on the way. The
+    climb is an absorbing Markov chain (recursion makes cycles), solved exactly with one
+    sparse linear solve.
+    """
+    from scipy.sparse import coo_matrix, identity
+    from scipy.sparse.linalg import spsolve
+
+    raw = stats.stats  # {func: (cc, nc, tt, ct, {caller: (nc, cc, tt, ct)})}
+    kind = {}
+
+    def classify(func):
+        if func not in kind:
+            filename = func[0]
+            if _under(filename, XBSM_DIR):
+                rel = Path(filename).resolve().relative_to(XBSM_DIR).with_suffix("")
+                parts = [p for p in rel.parts if p != "__init__"] or ["__init__"]
+                kind[func] = ("xbsm", ".".join(parts))
+            elif _under(filename, XARRAY_DIR):
+                kind[func] = ("xarray", None)
+            else:
+                kind[func] = ("other", None)
+        return kind[func]
+
+    states, buckets = {}, {}  # (func, through_xarray) -> row; bucket -> column
+    p_rows, p_cols, p_vals, a_rows, a_cols, a_vals = [], [], [], [], [], []
+    pending = []
+
+    def state(func, through):
+        key = (func, through)
+        if key not in states:
+            states[key] = len(states)
+            pending.append(key)
+        return states[key]
+
+    def column(bucket):
+        return buckets.setdefault(bucket, len(buckets))
+
+    def split(func, through, weight):
+        """(caller target, probability) pairs for time spent in ``func``."""
+        through = through or classify(func)[0] == "xarray"
+        callers = {c: e for c, e in raw[func][4].items() if c != func}
+        if not callers:
+            return [(("bucket", ("(outside xbsm)", through)), 1.0)]
+        weights = {c: e[weight] for c, e in callers.items()}
+        if sum(weights.values()) <= 0:
+            weights = {c: e[0] for c, e in callers.items()}  # by number of calls
+        total = sum(weights.values())
+        out = []
+        for caller, w in weights.items():
+            c_kind, c_module = classify(caller)
+            target = (("bucket", (c_module, through)) if c_kind == "xbsm"
+                      else ("state", (caller, through)))
+            out.append((target, w / total))
+        return out
+
+    source = defaultdict(float)  # state row -> seconds entering it
+    direct = defaultdict(float)  # bucket -> seconds
+    for func, (_cc, _nc, tt, _ct, _callers) in raw.items():
+        if tt <= 0:
+            continue
+        f_kind, module = classify(func)
+        if f_kind == "xbsm":
+            direct[(module, False)] += tt
+            continue
+        for (what, key), prob in split(func, False, 2):
+            if what == "bucket":
+                direct[key] += tt * prob
+            else:
+                source[state(*key)] += tt * prob
+    while pending:
+        func, through = pending.pop()
+        row = states[(func, through)]
+        for (what, key), prob in split(func, through, 3):
+            if what == "bucket":
+                a_rows.append(row)
+                a_cols.append(column(key))
+                a_vals.append(prob)
+            else:
+                p_rows.append(row)
+                p_cols.append(state(*key))
+                p_vals.append(prob)
+    out = defaultdict(float, direct)
+    n = len(states)
+    if n:
+        transition = coo_matrix((p_vals, (p_rows, p_cols)), shape=(n, n)).tocsc()
+        absorb = coo_matrix((a_vals, (a_rows, a_cols)), shape=(n, len(buckets))).tocsr()
+        s = np.zeros(n)
+        for row, seconds in source.items():
+            s[row] = seconds
+        # seconds passing through each state: (I - P)^T m = s
+        mass = spsolve((identity(n, format="csc") - transition).T.tocsc(), s)
+        totals = absorb.T @ mass
+        for bucket, col in buckets.items():
+            out[bucket] += float(totals[col])
+    return out
+
+
+def stack_shares(s, sc, method):
+    """The same grouping, exact: walk the Python stack at every profiler event.
+
+    A check on :func:`attribute`'s proportional rule (``sys.setprofile``; the time
+    between two events goes to the innermost xbsm frame then on the stack, as xarray
+    overhead if an xarray frame lies above it). Slower than cProfile; shares only.
+    """
+    xb, xa = str(XBSM_DIR), str(XARRAY_DIR)
+    cache = {}
+
+    def owner(frame):
+        through = False
+        while frame is not None:
+            filename = frame.f_code.co_filename
+            k = cache.get(filename)
+            if k is None:
+                path = str(Path(filename).resolve()) if not filename.startswith("<") else ""
+                if path.startswith(xb + os.sep):
+                    rel = Path(path).relative_to(xb).with_suffix("")
+                    k = ("xbsm", ".".join(p for p in rel.parts if p != "__init__") or "__init__")
+                else:
+                    k = ("xarray" if path.startswith(xa + os.sep) else "other", None)
+                cache[filename] = k
+            if k[0] == "xbsm":
+                return (k[1], through)
+            through = through or k[0] == "xarray"
+            frame = frame.f_back
+        return ("(outside xbsm)", through)
+
+    acc = defaultdict(float)
+    current = [None, 0.0]
+
+    def hook(frame, event, arg):
+        t = time.perf_counter()
+        if current[0] is not None:
+            acc[current[0]] += t - current[1]
+        current[0] = owner(frame.f_back if event == "return" else frame)
+        current[1] = time.perf_counter()
+
+    sys.setprofile(hook)
+    try:
+        xbsm.niirs(s, sc, method=method)
+    finally:
+        sys.setprofile(None)
+    total = sum(acc.values())
+    modules = defaultdict(float)
+    for (module, _), seconds in acc.items():
+        modules[module] += seconds / total
+    xarray = sum(v for (_, through), v in acc.items() if through) / total
+    return {"by_module_share": dict(sorted(modules.items(), key=lambda kv: -kv[1])),
+            "xarray_overhead_share": xarray}
+
+
+def profile_niirs(build, method):
+    s, sc = build()
+    xbsm.niirs(s, sc, method=method)  # warm
+    t0 = time.perf_counter()
+    xbsm.niirs(s, sc, method=method)
+    unprofiled = time.perf_counter() - t0
+    profiler = cProfile.Profile()
+    profiler.enable()
+    xbsm.niirs(s, sc, method=method)
+    profiler.disable()
+    stats = pstats.Stats(profiler)
+    total = stats.total_tt
+    buckets = attribute(stats)
+    modules = defaultdict(lambda: {"own_ms": 0.0, "xarray_ms": 0.0})
+    for (module, via_xarray), seconds in buckets.items():
+        modules[module]["xarray_ms" if via_xarray else "own_ms"] += 1e3 * seconds
+    for row in modules.values():
+        row["total_ms"] = row["own_ms"] + row["xarray_ms"]
+        row["share"] = row["total_ms"] / (1e3 * total)
+    xarray_ms = sum(r["xarray_ms"] for r in modules.values())
+
+    def top(key, n=25):
+        rows = sorted(stats.stats.items(), key=lambda kv: kv[1][key], reverse=True)[:n]
+        return [{"function": short_name(f), "ncalls": v[1], "tottime_ms": 1e3 * v[2],
+                 "cumtime_ms": 1e3 * v[3]} for f, v in rows]
+
+    return {
+        "method": method, "scenario": PROFILE_SCENARIO,
+        "unprofiled_call_ms": 1e3 * unprofiled, "profiled_total_ms": 1e3 * total,
+        "function_calls": sum(v[1] for v in stats.stats.values()),
+        "xarray_overhead_ms": xarray_ms, "xarray_overhead_share": xarray_ms / (1e3 * total),
+        "by_module": dict(sorted(modules.items(), key=lambda kv: -kv[1]["total_ms"])),
+        "top_cumulative": top(3), "top_self": top(2),
+        "stack_check": stack_shares(s, sc, method),
+    }
+
+
+# ---------------------------------------------------------------- report
+
+def machine():
+    info = {"machine": platform.machine(), "processor": platform.processor() or None,
+            "cpu_count": os.cpu_count(), "python": platform.python_version(),
+            "platform": platform.platform()}
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                info["cpu"] = line.split(":", 1)[1].strip()
+                break
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemTotal"):
+                info["memory_gib"] = round(int(line.split()[1]) / 2**20, 1)
+                break
+    except OSError:
+        pass
+    return info
+
+
+def commit():
+    def git(*args):
+        proc = subprocess.run(["git", "-C", str(ROOT), *args], capture_output=True, text=True)
+        return proc.stdout.strip() if proc.returncode == 0 else None
+
+    return {"commit": git("rev-parse", "--short", "HEAD"),
+            "xbsm_modified_since_commit": bool(git("status", "--porcelain", "--", "xbsm"))}
+
+
+def fmt(row):
+    return f"{row['median_ms']:7.1f} ({row['q1_ms']:.1f}-{row['q3_ms']:.1f})"
+
+
+def print_tables(record):
+    print(f"\nmedian of {record['calls']} single calls after {WARMUP} warm-up calls, in ms "
+          "(interquartile range); ratio = pyBSM median / xbsm median, call alone")
+    head = (f"{'scenario':12s} {'function':8s} {'method':9s} {'xbsm call':>22s} "
+            f"{'xbsm build+call':>22s} {'pyBSM':>7s} {'':>22s} {'ratio':>6s}")
+    print(head)
+    print("-" * len(head))
+    for name, sc in record["scenarios"].items():
+        pb = sc["pybsm"]
+        for key, row in sc["xbsm"].items():
+            func, method = key.split("/")
+            theirs = pb["snr" if func == "snr" else "niirs"]["call"]
+            label = "snr" if func == "snr" else "niirs"
+            print(f"{name:12s} {func:8s} {method:9s} {fmt(row['call']):>22s} "
+                  f"{fmt(row['build_call']):>22s} {label:>7s} {fmt(theirs):>22s} "
+                  f"{theirs['median_ms'] / row['call']['median_ms']:6.2f}")
+        for func in ("niirs5",):
+            print(f"{name:12s} {'':8s} {'':9s} {'':>22s} {'':>22s} {func:>7s} "
+                  f"{fmt(pb[func]['call']):>22s}")
+    print("\npyBSM 0.16.1 (NUMBA_NUM_THREADS=1), ms: call alone | build + call")
+    for name, sc in record["scenarios"].items():
+        for func, row in sc["pybsm"].items():
+            print(f"  {name:12s} {func:7s} {fmt(row['call'])} | {fmt(row['build_call'])}")
+    print("\nagreement with pyBSM, method='pybsm': |NIIRS difference| GIQE 3, 4, 5; "
+          "SNR difference relative to max(SNR, 1)")
+    for name, sc in record["scenarios"].items():
+        a = sc["agreement"]["pybsm"]
+        print(f"  {name:12s} " + ", ".join(f"{d:.1e}" for d in a["abs_niirs_difference"])
+              + f"; SNR {a['relative_snr_difference']:.1e}")
+    print("\nload average (1, 5, 15 min) after pyBSM | after xbsm, per scenario")
+    for name, sc in record["scenarios"].items():
+        print(f"  {name:12s} " + " | ".join(
+            ", ".join(f"{v:.2f}" for v in sc[key])
+            for key in ("load_average_after_pybsm", "load_average_after_xbsm")))
+
+
+def print_profile(profiles):
+    methods = list(profiles)
+    print(f"\nprofile of one xbsm.niirs call on {PROFILE_SCENARIO} (cProfile), ms: "
+          "own code + numpy it calls directly / xarray below it")
+    print(f"{'module':22s}" + "".join(f"{m:>24s}" for m in methods))
+    modules = []
+    for p in profiles.values():
+        modules += [m for m in p["by_module"] if m not in modules]
+    for module in modules:
+        cells = []
+        for m in methods:
+            row = profiles[m]["by_module"].get(module)
+            cells.append(f"{row['own_ms']:8.1f} / {row['xarray_ms']:6.1f} ({row['share']:4.0%})"
+                         if row else "")
+        print(f"{module:22s}" + "".join(f"{c:>24s}" for c in cells))
+    for label, key, unit in (("xarray overhead", "xarray_overhead_ms", "ms"),
+                             ("profiled total", "profiled_total_ms", "ms"),
+                             ("unprofiled call", "unprofiled_call_ms", "ms"),
+                             ("function calls", "function_calls", "")):
+        cells = []
+        for m in methods:
+            value = profiles[m][key]
+            share = (f" ({profiles[m]['xarray_overhead_share']:.0%})"
+                     if key == "xarray_overhead_ms" else "")
+            cells.append(f"{value:.1f} {unit}{share}" if unit else f"{value}")
+        print(f"{label:22s}" + "".join(f"{c:>24s}" for c in cells))
+    print("\ncheck: the same shares from the exact call stack (sys.setprofile)")
+    print(f"{'module':22s}" + "".join(f"{m:>12s}" for m in methods))
+    for module in modules:
+        print(f"{module:22s}" + "".join(
+            f"{profiles[m]['stack_check']['by_module_share'].get(module, 0.0):12.0%}"
+            for m in methods))
+    print(f"{'xarray overhead':22s}" + "".join(
+        f"{profiles[m]['stack_check']['xarray_overhead_share']:12.0%}" for m in methods))
+    for m in methods:
+        print(f"\ntop cumulative, method={m!r} (ms cumulative, ms self, calls):")
+        for row in profiles[m]["top_cumulative"][:12]:
+            print(f"  {row['cumtime_ms']:8.1f} {row['tottime_ms']:8.1f} {row['ncalls']:7d}  "
+                  f"{row['function']}")
+        print(f"top self time, method={m!r}:")
+        for row in profiles[m]["top_self"][:8]:
+            print(f"  {row['cumtime_ms']:8.1f} {row['tottime_ms']:8.1f} {row['ncalls']:7d}  "
+                  f"{row['function']}")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--calls", type=int, default=20, help="timed calls per function "
+                        f"(after {WARMUP} warm-up calls); median, quartiles, min, max")
+    args = parser.parse_args()
+    if args.calls < 2:
+        parser.error("--calls must be at least 2")
+
+    t_start = time.perf_counter()
+    record = {"description": __doc__.split("\n\n")[0],
+              "command": "python recipes/bench_single.py" + (
+                  f" --calls {args.calls}" if args.calls != 20 else ""),
+              "load_average_at_start": os.getloadavg(), "date": time.strftime("%Y-%m-%d"),
+              **commit(), "machine": machine(), "calls": args.calls, "warmup_calls": WARMUP}
+    cases = scenarios()
+
+    record["scenarios"] = {}
+    for name, (text, build, kw) in cases.items():
+        # pyBSM then xbsm, scenario by scenario, so that both see the same machine load
+        print(f"timing {name} ...", file=sys.stderr)
+        pybsm = run_pybsm_single({name: kw}, args.calls)
+        load_between = os.getloadavg()
+        theirs = pybsm["scenarios"][name]
+        record["scenarios"][name] = {
+            "description": text,
+            "pybsm": {func: {"call": summary(row["call"]),
+                             "build_call": summary(row["build_call"]),
+                             "values": row["values"]} for func, row in theirs.items()},
+            "xbsm": time_xbsm(build, args.calls),
+            "agreement": agreement(build, theirs),
+            "load_average_after_pybsm": load_between,
+            "load_average_after_xbsm": os.getloadavg(),
+        }
+    record["versions"] = {
+        "xbsm": {"xbsm": xbsm.__version__, "xarray": xr.__version__, "numpy": np.__version__,
+                 "python": platform.python_version()},
+        "pybsm": {**pybsm["versions"], "python": pybsm["python"]},
+    }
+    record["profile"] = {m: profile_niirs(cases[PROFILE_SCENARIO][1], m) for m in METHODS}
+    record["runtime_s"] = time.perf_counter() - t_start
+    record["load_average_at_end"] = os.getloadavg()
+
+    print_tables(record)
+    print_profile(record["profile"])
+    print(f"\nload average at start {record['load_average_at_start']}, at end "
+          f"{record['load_average_at_end']}; {record['runtime_s']:.0f} s")
+    (DOCS / "benchmarks").mkdir(parents=True, exist_ok=True)
+    (DOCS / "benchmarks" / "bench_single.json").write_text(
+        json.dumps(record, indent=1, default=float) + "\n")
+
+
+if __name__ == "__main__":
+    main()
