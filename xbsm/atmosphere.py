@@ -37,6 +37,7 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
+from ._metadata import named
 from .flags import flag, flag_attrs
 
 __all__ = [
@@ -72,6 +73,7 @@ _SI_UNITS = ("1", "W m-2 sr-1 m-1", "W m-2 sr-1 m-1", "W m-2 sr-1 m-1", "W m-2 s
 #: pyBSM's conversion W/(sr cm^2 um) -> W/(m^2 sr m): the float32 value divided by
 #: float32(1e-10) in float32 (NumPy 2 keeps float32 for float32 / Python float).
 _DIVISOR = np.array([1.0, 1e-10, 1e-10, 1e-10, 1e-10], dtype=np.float32)
+_DIVISOR.flags.writeable = False
 #: interpolation -> (value rule in altitude, altitude coordinate, value rule in ground range)
 _RULES = MappingProxyType({
     "exact": ("linear", "altitude", "linear"),
@@ -437,7 +439,7 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation="log-line
                              "standard_name": "radiation_wavelength"})
     described = zip(VARIABLES, _LONG_NAMES, _SI_UNITS, strict=True)
     data = {
-        name: spectra.isel(component=i, drop=True).assign_attrs(units=units, long_name=long_name)
+        name: named(spectra.isel(component=i, drop=True), units, long_name)
         for i, (name, long_name, units) in enumerate(described)
     }
     data["flags"] = flags.assign_attrs(flag_attrs("atmosphere validity flags"))

@@ -7,16 +7,18 @@ ground range and both visibilities.
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 import numpy as np
 import xarray as xr
 
 from .params import scenario, sensor
 from .radiometry import dark_current_from_density
 
-OLSON_BANDS = {
+OLSON_BANDS = MappingProxyType({
     "red": (0.50e-6, 0.66e-6, 0.80),
     "nir": (0.55e-6, 0.85e-6, 0.71),
-}
+})
 """Band edges [m] and band-average quantum efficiency [1] of paper Table 2."""
 
 DATABASE_GROUND_RANGES = np.concatenate([
@@ -26,6 +28,7 @@ DATABASE_GROUND_RANGES = np.concatenate([
     np.arange(85000.0, 300001.0, 5000.0),
 ])
 """The 97 ground ranges of the atmosphere database (paper Appendix A). [m]"""
+DATABASE_GROUND_RANGES.flags.writeable = False  # a read-only table
 
 
 def olson_sensor(band: str = "nir", **overrides) -> xr.Dataset:

@@ -7,16 +7,9 @@ scenario dimensions. Heights are above the spherical Earth's surface. [m]
 from __future__ import annotations
 
 import numpy as np
-import xarray as xr
 
+from ._metadata import named
 from .constants import EARTH_RADIUS
-
-
-def _attrs(out, units, long_name):
-    if isinstance(out, xr.DataArray):
-        return out.assign_attrs(units=units, long_name=long_name)
-    return out
-
 
 #: Formulas of the curved-earth triangle: "stable" (default: no cancellation near nadir or
 #: on short paths) or "law-of-cosines" (pyBSM 0.16.1's, for number-for-number parity).
@@ -65,7 +58,7 @@ def slant_range(ground_range, sensor_altitude, target_altitude=0.0, *, form="sta
     else:
         half = np.sin(ground_range / (2.0 * EARTH_RADIUS))
         out = np.sqrt((a - c) ** 2 + 4.0 * a * c * half**2)
-    return _attrs(out, "m", "slant range")
+    return named(out, "m", "slant range")
 
 
 def _central_angle_legs(slant_range, a, c):
@@ -120,7 +113,7 @@ def nadir_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="stab
     else:
         sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
         out = np.arctan2(c * sine, (a - c) + c * two_half_sq)
-    return _attrs(out, "rad", "nadir angle")
+    return named(out, "rad", "nadir angle")
 
 
 def elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="stable"):
@@ -148,7 +141,7 @@ def elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="
         Elevation angle. [rad]
     """
     out = np.pi / 2 - nadir_angle(slant_range, sensor_altitude, target_altitude, form=form)
-    return _attrs(out, "rad", "elevation angle")
+    return named(out, "rad", "elevation angle")
 
 
 def altitude_along_path(distance_from_target, slant_range, sensor_altitude, target_altitude=0.0,
@@ -184,7 +177,7 @@ def altitude_along_path(distance_from_target, slant_range, sensor_altitude, targ
     phi = nadir_angle(slant_range, sensor_altitude, target_altitude, form=form)
     b = slant_range - distance_from_target
     out = np.sqrt(a**2 + b**2 - 2.0 * a * b * np.cos(phi)) - EARTH_RADIUS
-    return _attrs(out, "m", "altitude along the line of sight")
+    return named(out, "m", "altitude along the line of sight")
 
 
 def ifov(pixel_pitch, focal_length):
@@ -202,7 +195,7 @@ def ifov(pixel_pitch, focal_length):
     float or xr.DataArray
         Angular sample spacing. [rad]
     """
-    return _attrs(pixel_pitch / focal_length, "rad", "instantaneous field of view")
+    return named(pixel_pitch / focal_length, "rad", "instantaneous field of view")
 
 
 def ground_sample_distance(ifov, slant_range):
@@ -220,7 +213,7 @@ def ground_sample_distance(ifov, slant_range):
     float or xr.DataArray
         Ground sample distance. [m]
     """
-    return _attrs(ifov * slant_range, "m", "ground sample distance")
+    return named(ifov * slant_range, "m", "ground sample distance")
 
 
 def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="stable"):
@@ -255,8 +248,8 @@ def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *,
     c = EARTH_RADIUS + target_altitude
     if form == "law-of-cosines":
         cosine = (a**2.0 - c**2.0 - slant_range**2.0) / (2.0 * c * slant_range)
-        return _attrs(np.arcsin(np.minimum(np.maximum(cosine, -1.0), 1.0)), "rad",
-                      "elevation angle at the target")
+        return named(np.arcsin(np.minimum(np.maximum(cosine, -1.0), 1.0)), "rad",
+                     "elevation angle at the target")
     sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
     out = np.arctan2((a - c) - a * two_half_sq, a * sine)
-    return _attrs(out, "rad", "elevation angle at the target")
+    return named(out, "rad", "elevation angle at the target")

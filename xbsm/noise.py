@@ -5,11 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-
-def _named(out, units, long_name):
-    if isinstance(out, xr.DataArray):
-        return out.assign_attrs(units=units, long_name=long_name)
-    return out
+from ._metadata import named
 
 
 def shot_noise(photoelectrons):
@@ -25,7 +21,7 @@ def shot_noise(photoelectrons):
     float or xr.DataArray
         [rms electrons]
     """
-    return _named(np.sqrt(photoelectrons), "1", "shot noise")
+    return named(np.sqrt(photoelectrons), "count", "shot noise")
 
 
 def dark_current_noise(dark_current, integration_time, tdi_stages=1.0):
@@ -45,8 +41,8 @@ def dark_current_noise(dark_current, integration_time, tdi_stages=1.0):
     float or xr.DataArray
         [rms electrons]
     """
-    return _named(
-        np.sqrt(tdi_stages * dark_current * integration_time), "1", "dark current noise"
+    return named(
+        np.sqrt(tdi_stages * dark_current * integration_time), "count", "dark current noise"
     )
 
 
@@ -71,8 +67,8 @@ def quantization_noise(well_range, bit_depth):
 
     .. math:: \sigma_q = \frac{N_{range}}{\sqrt{12}\,(2^b - 1)}
     """
-    return _named(
-        well_range / (np.sqrt(12) * (2.0**bit_depth - 1.0)), "1", "quantization noise"
+    return named(
+        well_range / (np.sqrt(12) * (2.0**bit_depth - 1.0)), "count", "quantization noise"
     )
 
 
@@ -95,7 +91,7 @@ def noise_gain(kernel: xr.DataArray):
     with exact float equality: [0.7, 0.2, 0.1] sums to 0.9999999999999999.
     """
     out = np.sqrt((kernel**2).sum(("kernel_y", "kernel_x")))
-    return _named(out, "1", "noise gain")
+    return named(out, "1", "noise gain")
 
 
 def total_noise(shot_variance, quantization, read, other):
@@ -115,7 +111,7 @@ def total_noise(shot_variance, quantization, read, other):
         [rms electrons]
     """
     out = np.sqrt(shot_variance + quantization**2 + read**2 + other**2)
-    return _named(out, "1", "total noise")
+    return named(out, "count", "total noise")
 
 
 def stacked_snr(snr, frame_stacks):
@@ -133,7 +129,7 @@ def stacked_snr(snr, frame_stacks):
     xr.DataArray
         [1]
     """
-    return _named(np.sqrt(frame_stacks) * snr, "1", "contrast signal-to-noise ratio")
+    return named(np.sqrt(frame_stacks) * snr, "1", "contrast signal-to-noise ratio")
 
 
 def noise_terms(signal: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
@@ -177,18 +173,18 @@ def noise_terms(signal: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
     return xr.Dataset({
         "snr": stacked_snr(snr_frame, s["frame_stacks"]).assign_attrs(
             long_name="contrast signal-to-noise ratio after frame stacking"),
-        "snr_frame": _named(snr_frame, "1", "single-frame contrast signal-to-noise ratio"),
-        "shot_noise": _named(shot_noise(brighter), rms, "shot noise"),
-        "scene_noise": _named(scene, rms, "scene noise"),
-        "path_noise": _named(path, rms, "path radiance noise"),
-        "self_emission_noise": _named(np.sqrt(signal["sensor_rate"] * exposure), rms,
-                                      "self-emission and stray-light noise"),
-        "dark_current_noise": _named(
+        "snr_frame": named(snr_frame, "1", "single-frame contrast signal-to-noise ratio"),
+        "shot_noise": named(shot_noise(brighter), rms, "shot noise"),
+        "scene_noise": named(scene, rms, "scene noise"),
+        "path_noise": named(path, rms, "path radiance noise"),
+        "self_emission_noise": named(np.sqrt(signal["sensor_rate"] * exposure), rms,
+                                     "self-emission and stray-light noise"),
+        "dark_current_noise": named(
             dark_current_noise(s["dark_current"], signal["effective_integration_time"],
                                s["tdi_stages"]),
             rms, "dark current noise"),
-        "quantization_noise": _named(xr.DataArray(quantization), rms, "quantization noise"),
-        "read_noise": _named(s["read_noise"], rms, "read noise"),
-        "other_noise": _named(s["other_noise"], rms, "other noise"),
-        "total_noise": _named(total, rms, "total noise"),
+        "quantization_noise": named(xr.DataArray(quantization), rms, "quantization noise"),
+        "read_noise": named(s["read_noise"], rms, "read noise"),
+        "other_noise": named(s["other_noise"], rms, "other noise"),
+        "total_noise": named(total, rms, "total noise"),
     })

@@ -6,10 +6,12 @@ returns it; nothing is shown or saved here.
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 import numpy as np
 import xarray as xr
 
-NOISE_TERMS = {
+NOISE_TERMS = MappingProxyType({
     "total_noise": "total",
     "scene_noise": "scene",
     "path_noise": "path",
@@ -17,7 +19,7 @@ NOISE_TERMS = {
     "dark_current_noise": "dark current",
     "quantization_noise": "quantization",
     "read_noise": "readout",
-}
+})
 
 
 def _axes(ax):

@@ -32,6 +32,8 @@ import math
 import numpy as np
 import xarray as xr
 
+from ._metadata import named
+
 __all__ = [
     "EDGE_RULES",
     "cutoff_wavelength",
@@ -260,7 +262,8 @@ def _panel_edges(cutoff, n_panels, breakpoints):
 
 
 def edge_quadrature(*, cutoff, ifov, rule, grid_size, nodes_per_panel, panels_per_oscillation,
-                    min_panels, breakpoints=None, frequency_offset=1e-6, name="custom"):
+                    min_panels, breakpoints=None, frequency_offset=1e-6, name="custom",
+                    max_nodes=None):
     r"""Frequency nodes and weights of an edge-response quadrature rule.
 
     Parameters
@@ -290,6 +293,9 @@ def edge_quadrature(*, cutoff, ifov, rule, grid_size, nodes_per_panel, panels_pe
         (pyBSM uses 1e-6). [cycles/rad]
     name : str, optional
         Method name recorded in the attrs.
+    max_nodes : int, optional
+        Refuse (``ValueError``) a Gauss-Legendre rule that would need more nodes: a
+        detector that samples the optics absurdly coarsely asks for millions.
 
     Returns
     -------
@@ -329,6 +335,14 @@ def edge_quadrature(*, cutoff, ifov, rule, grid_size, nodes_per_panel, panels_pe
     else:
         n_osc = cutoff * ifov_max * MAX_POSITION
         n_panels = max(min_panels, math.ceil(panels_per_oscillation * n_osc))
+        if max_nodes is not None and n_panels * nodes_per_panel > max_nodes:
+            q = 1.0 / (cutoff * ifov_max)
+            raise ValueError(
+                f"the edge-response quadrature would need {n_panels * nodes_per_panel} "
+                f"frequency nodes (limit max_frequency_nodes={max_nodes}): the detector samples "
+                f"the optics far too coarsely (Q = lambda_min F / p = {q:.3g}); check "
+                "pixel_pitch_x, pixel_pitch_y, focal_length and aperture_diameter, or raise the "
+                "limit with xbsm.method(..., max_frequency_nodes=...)")
         nodes, weights = gauss_legendre_rule(
             _panel_edges(cutoff, n_panels, breakpoints), nodes_per_panel
         )
@@ -416,7 +430,8 @@ def samples_per_oscillation(nodes, cutoff, ifov_x, ifov_y):
         [1]
     """
     oscillations = cutoff * np.maximum(ifov_x, ifov_y) * MAX_POSITION
-    return (nodes.sizes["frequency"] / oscillations).assign_attrs(units="1")
+    return named(nodes.sizes["frequency"] / oscillations, "1",
+                 "frequency samples per period of the edge-response integrand at 3 px")
 
 
 def cutoff_wavelength(wavelength: xr.DataArray, qe, transmission):
@@ -437,7 +452,8 @@ def cutoff_wavelength(wavelength: xr.DataArray, qe, transmission):
     contributes = (xr.DataArray(qe) * xr.DataArray(transmission)) > 0
     contributes = contributes.broadcast_like(wavelength)
     out = wavelength.where(contributes).min("wavelength")
-    return out.assign_attrs(units="m", long_name="shortest contributing wavelength")
+    return named(out, "m", "shortest contributing wavelength",
+                 standard_name="radiation_wavelength")
 
 
 def optics_cutoff(aperture_diameter, wavelength: xr.DataArray, qe, transmission):
@@ -459,7 +475,7 @@ def optics_cutoff(aperture_diameter, wavelength: xr.DataArray, qe, transmission)
         [cycles/rad]
     """
     out = aperture_diameter / cutoff_wavelength(wavelength, qe, transmission)
-    return out.assign_attrs(units="cycles/rad", long_name="optics cutoff frequency D/lambda_min")
+    return named(out, "cycles/rad", "optics cutoff frequency D/lambda_min")
 
 
 def undersampled(nodes, cutoff, ifov_x, ifov_y, threshold):

@@ -7,27 +7,24 @@ in W/(m^2 sr m), spectral irradiance in W/(m^2 m).
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 import numpy as np
 import xarray as xr
 
+from ._metadata import named
 from .constants import CODATA, Constants
 
 DATABASE_REFLECTANCE = 0.15
 """Target reflectance used in the MODTRAN database runs (paper Appendix A). [1]"""
 
-GIQE_TARGET = {"reflectance": 0.15, "temperature": 282.0}
+GIQE_TARGET = MappingProxyType({"reflectance": 0.15, "temperature": 282.0})
 """GIQE standard target: 15% reflectance at 282 K (IBSM; Leachtenauer et al. 1997)."""
-GIQE_BACKGROUND = {"reflectance": 0.07, "temperature": 280.0}
+GIQE_BACKGROUND = MappingProxyType({"reflectance": 0.07, "temperature": 280.0})
 """GIQE standard background: 7% reflectance at 280 K."""
 EMISSIVE_BAND_START = 2.9e-6
 """Bands starting at or beyond this wavelength use the emissive GIQE target
 (reflectance 0, so only the 282 K / 280 K temperature contrast counts). [m]"""
-
-
-def _named(out, units, long_name):
-    if isinstance(out, xr.DataArray):
-        return out.assign_attrs(units=units, long_name=long_name)
-    return out
 
 
 def blackbody_radiance(wavelength, temperature, constants: Constants = CODATA):
@@ -58,7 +55,7 @@ def blackbody_radiance(wavelength, temperature, constants: Constants = CODATA):
     h, c, k = constants.planck, constants.speed_of_light, constants.boltzmann
     x = h * c / (wavelength * k * temperature)
     out = (2.0 * h * c**2.0 / wavelength**5.0) * np.exp(-x) / -np.expm1(-x)
-    return _named(out, "W m-2 sr-1 m-1", "blackbody spectral radiance")
+    return named(out, "W m-2 sr-1 m-1", "blackbody spectral radiance")
 
 
 def total_radiance(atmosphere: xr.Dataset, reflectance, temperature, constants=CODATA):
@@ -97,7 +94,7 @@ def total_radiance(atmosphere: xr.Dataset, reflectance, temperature, constants=C
         + atmosphere["solar_scatter"]
         + atmosphere["ground_reflected"] * (reflectance / DATABASE_REFLECTANCE)
     )
-    return _named(out, "W m-2 sr-1 m-1", "spectral radiance at the aperture")
+    return named(out, "W m-2 sr-1 m-1", "spectral radiance at the aperture")
 
 
 def path_radiance(atmosphere: xr.Dataset):
@@ -114,7 +111,7 @@ def path_radiance(atmosphere: xr.Dataset):
         Path spectral radiance. [W m-2 sr-1 m-1]
     """
     out = atmosphere["path_thermal"] + atmosphere["solar_scatter"]
-    return _named(out, "W m-2 sr-1 m-1", "path spectral radiance")
+    return named(out, "W m-2 sr-1 m-1", "path spectral radiance")
 
 
 def is_emissive_band(wavelength_min) -> bool:
@@ -129,7 +126,7 @@ def giqe_radiance(atmosphere: xr.Dataset, standard: dict, emissive: bool, consta
     ----------
     atmosphere : xr.Dataset
         Atmosphere for the path.
-    standard : dict
+    standard : mapping
         :data:`GIQE_TARGET` (15%, 282 K) or :data:`GIQE_BACKGROUND` (7%, 280 K).
     emissive : bool
         Use the emissive convention (reflectance 0, temperature kept).
@@ -143,7 +140,7 @@ def giqe_radiance(atmosphere: xr.Dataset, standard: dict, emissive: bool, consta
     """
     reflectance = 0.0 if emissive else standard["reflectance"]
     out = total_radiance(atmosphere, reflectance, standard["temperature"], constants)
-    return _named(out, "W m-2 sr-1 m-1", "GIQE standard spectral radiance")
+    return named(out, "W m-2 sr-1 m-1", "GIQE standard spectral radiance")
 
 
 def throughput_factor(aperture_diameter, focal_length):
@@ -166,7 +163,7 @@ def throughput_factor(aperture_diameter, focal_length):
     Schott's form of IBSM Eq. 3-34, valid for fast optics too (paper Eq. 2).
     """
     out = np.pi / (1.0 + 4.0 * (focal_length / aperture_diameter) ** 2.0)
-    return _named(out, "sr", "focal-plane throughput factor")
+    return named(out, "sr", "focal-plane throughput factor")
 
 
 def focal_plane_irradiance(radiance, aperture_diameter, focal_length):
@@ -191,7 +188,7 @@ def focal_plane_irradiance(radiance, aperture_diameter, focal_length):
     # (L * pi) / (1 + 4F^2), pyBSM's rounding order: contrast SNRs near 1e-7 are
     # differences of nearly equal counts and keep only that order's bits
     out = radiance * np.pi / (1.0 + 4.0 * (focal_length / aperture_diameter) ** 2.0)
-    return _named(out, "W m-2 m-1", "focal-plane spectral irradiance")
+    return named(out, "W m-2 m-1", "focal-plane spectral irradiance")
 
 
 def cold_shield_self_emission(wavelength, cold_shield_temperature, aperture_diameter,
@@ -220,7 +217,7 @@ def cold_shield_self_emission(wavelength, cold_shield_temperature, aperture_diam
     """
     solid = np.pi - throughput_factor(aperture_diameter, focal_length)
     out = solid * blackbody_radiance(wavelength, cold_shield_temperature, constants)
-    return _named(out, "W m-2 m-1", "cold shield self-emission irradiance")
+    return named(out, "W m-2 m-1", "cold shield self-emission irradiance")
 
 
 def cold_stop_self_emission(wavelength, cold_filter_temperature, cold_filter_emissivity,
@@ -249,7 +246,7 @@ def cold_stop_self_emission(wavelength, cold_filter_temperature, cold_filter_emi
         wavelength, cold_filter_temperature, constants
     )
     out = focal_plane_irradiance(radiance, aperture_diameter, focal_length)
-    return _named(out, "W m-2 m-1", "cold stop self-emission irradiance")
+    return named(out, "W m-2 m-1", "cold stop self-emission irradiance")
 
 
 def optics_self_emission(wavelength, optics_temperature, optics_emissivity,
@@ -281,7 +278,7 @@ def optics_self_emission(wavelength, optics_temperature, optics_emissivity,
         * blackbody_radiance(wavelength, optics_temperature, constants)
     )
     out = focal_plane_irradiance(radiance, aperture_diameter, focal_length)
-    return _named(out, "W m-2 m-1", "optics self-emission irradiance")
+    return named(out, "W m-2 m-1", "optics self-emission irradiance")
 
 
 def photon_detection_rate(irradiance, quantum_efficiency, detector_width_x,
@@ -316,7 +313,7 @@ def photon_detection_rate(irradiance, quantum_efficiency, detector_width_x,
         * detector_width_y
         * irradiance
     )
-    return _named(out, "s-1 m-1", "spectral photoelectron rate")
+    return named(out, "s-1 m-1", "spectral photoelectron rate")
 
 
 def band_integral(spectral: xr.DataArray) -> xr.DataArray:
@@ -330,9 +327,17 @@ def band_integral(spectral: xr.DataArray) -> xr.DataArray:
     Returns
     -------
     xr.DataArray
-        [X]
+        [X]; ``units`` and ``long_name`` follow from the integrand's, when it has them.
     """
-    return spectral.integrate("wavelength")
+    out = spectral.integrate("wavelength")
+    units = spectral.attrs.get("units")
+    if units is None:
+        return out
+    if units.endswith(" m-1"):
+        units = units[: -len(" m-1")]
+    else:
+        units = "m" if units == "1" else f"{units} m"
+    return named(out, units, f"band-integrated {spectral.attrs.get('long_name', 'quantity')}")
 
 
 def dark_current_from_density(dark_current_density, detector_width_x, detector_width_y,
@@ -354,7 +359,7 @@ def dark_current_from_density(dark_current_density, detector_width_x, detector_w
         Dark current. [electrons/s]
     """
     out = dark_current_density * detector_width_x * detector_width_y / constants.elementary_charge
-    return _named(out, "s-1", "dark current")
+    return named(out, "s-1", "dark current")
 
 
 def well_fill_scale(photoelectrons, max_well, max_well_fill):
@@ -377,7 +382,7 @@ def well_fill_scale(photoelectrons, max_well, max_well_fill):
     limit = max_well_fill * max_well
     with np.errstate(divide="ignore", invalid="ignore"):
         out = xr.where(photoelectrons > limit, limit / photoelectrons, 1.0)
-    return _named(out, "1", "well-fill integration time scale")
+    return named(out, "1", "well-fill integration time scale")
 
 
 def resample_spectral(values, wavelength: xr.DataArray, name: str):
@@ -486,12 +491,12 @@ def sensor_band_terms(sensor: xr.Dataset, wavelength: xr.DataArray,
     sensor_irradiance = self_emission + resample_spectral(s["stray_irradiance"], wavelength,
                                                           "stray_irradiance")
     return xr.Dataset({
-        "optics_transmission": _named(optics, "1", "optics transmission on the band"),
-        "quantum_efficiency": _named(
+        "optics_transmission": named(optics, "1", "optics transmission on the band"),
+        "quantum_efficiency": named(
             resample_spectral(s["quantum_efficiency"], wavelength, "quantum_efficiency"),
             "1", "quantum efficiency on the band"),
-        "sensor_irradiance": _named(sensor_irradiance, "W m-2 m-1",
-                                    "self-emission and stray focal-plane spectral irradiance"),
+        "sensor_irradiance": named(sensor_irradiance, "W m-2 m-1",
+                                   "self-emission and stray focal-plane spectral irradiance"),
     })
 
 
@@ -514,7 +519,7 @@ def detector_irradiance(radiance, band: xr.Dataset, sensor: xr.Dataset):
     """
     scene = focal_plane_irradiance(radiance, sensor["aperture_diameter"], sensor["focal_length"])
     out = band["optics_transmission"] * scene + band["sensor_irradiance"]
-    return _named(out, "W m-2 m-1", "focal-plane spectral irradiance")
+    return named(out, "W m-2 m-1", "focal-plane spectral irradiance")
 
 
 def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
@@ -565,18 +570,18 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
     path = band["optics_transmission"] * focal_plane_irradiance(
         path_radiance(atmosphere), s["aperture_diameter"], s["focal_length"])
     return xr.Dataset({
-        "target_photoelectrons": _named(n_target, "count", "target photoelectrons"),
-        "background_photoelectrons": _named(n_background, "count", "background photoelectrons"),
-        "contrast_photoelectrons": _named(n_target - n_background, "count",
-                                          "contrast photoelectrons"),
-        "effective_integration_time": _named(scale * s["integration_time"], "s",
+        "target_photoelectrons": named(n_target, "count", "target photoelectrons"),
+        "background_photoelectrons": named(n_background, "count", "background photoelectrons"),
+        "contrast_photoelectrons": named(n_target - n_background, "count",
+                                         "contrast photoelectrons"),
+        "effective_integration_time": named(scale * s["integration_time"], "s",
                                    "integration time after the well-fill limit"),
         "well_fill_scale": scale,
-        "spectral_weights": _named(spectral, "s-1 m-1", "target spectral photoelectron rate"),
-        "path_rate": _named(rate(path), "s-1", "path radiance photoelectron rate"),
-        "target_scene_rate": _named(rate(target_irradiance - other), "s-1",
-                                    "target scene and path photoelectron rate"),
-        "background_scene_rate": _named(rate(background_irradiance - other), "s-1",
-                                        "background scene and path photoelectron rate"),
-        "sensor_rate": _named(rate(other), "s-1", "self-emission and stray photoelectron rate"),
+        "spectral_weights": named(spectral, "s-1 m-1", "target spectral photoelectron rate"),
+        "path_rate": named(rate(path), "s-1", "path radiance photoelectron rate"),
+        "target_scene_rate": named(rate(target_irradiance - other), "s-1",
+                                   "target scene and path photoelectron rate"),
+        "background_scene_rate": named(rate(background_irradiance - other), "s-1",
+                                       "background scene and path photoelectron rate"),
+        "sensor_rate": named(rate(other), "s-1", "self-emission and stray photoelectron rate"),
     })

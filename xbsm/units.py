@@ -11,14 +11,16 @@ units library is required.
 from __future__ import annotations
 
 import math
+from types import MappingProxyType
 
 __all__ = ["accepted", "si_factor"]
 
 #: Decimal prefixes accepted on the base units m, s and rad.
-_PREFIXES = {"": 1.0, "k": 1e3, "c": 1e-2, "m": 1e-3, "u": 1e-6, "\u00b5": 1e-6, "n": 1e-9}
+_PREFIXES = MappingProxyType(
+    {"": 1.0, "k": 1e3, "c": 1e-2, "m": 1e-3, "u": 1e-6, "\u00b5": 1e-6, "n": 1e-9})
 _BASES = ("m", "s", "rad")
 #: Other spellings, and units that are a fixed multiple of a base unit.
-_ALIASES = {
+_ALIASES = MappingProxyType({
     "meter": "m", "metre": "m", "meters": "m", "metres": "m",
     "kilometer": "km", "kilometre": "km", "kilometers": "km", "kilometres": "km",
     "micron": "um", "microns": "um", "micrometer": "um", "micrometre": "um",
@@ -27,10 +29,12 @@ _ALIASES = {
     "radian": "rad", "radians": "rad", "kelvin": "K",
     "m/s": "m s-1", "rad/s": "rad s-1", "1/s": "s-1", "electrons/s": "s-1",
     "dimensionless": "1",
-}
-_MULTIPLES = {"deg": ("rad", math.pi / 180.0), "degree": ("rad", math.pi / 180.0),
-              "degrees": ("rad", math.pi / 180.0), "km/h": ("m s-1", 1.0 / 3.6),
-              "mrad/s": ("rad s-1", 1e-3), "urad/s": ("rad s-1", 1e-6)}
+})
+_MULTIPLES = MappingProxyType({
+    "deg": ("rad", math.pi / 180.0), "degree": ("rad", math.pi / 180.0),
+    "degrees": ("rad", math.pi / 180.0), "km/h": ("m s-1", 1.0 / 3.6),
+    "mrad/s": ("rad s-1", 1e-3), "urad/s": ("rad s-1", 1e-6),
+})
 
 
 def _scale(unit: str):

@@ -22,6 +22,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._metadata import named
+
 __all__ = [
     "EHO_POSITIONS",
     "RER_POSITIONS",
@@ -36,10 +38,7 @@ EHO_POSITIONS = np.arange(1.0, 3.25, 0.25)
 
 RER_POSITIONS = np.array([-0.5, 0.5])
 """Distances from the edge whose difference is the RER: -0.5 and +0.5 px. [px]"""
-
-
-def _attrs(da, units, long_name, **extra):
-    return da.assign_attrs(units=units, long_name=long_name, **extra)
+EHO_POSITIONS.flags.writeable = RER_POSITIONS.flags.writeable = False  # read-only tables
 
 
 def _as_position(position):
@@ -140,7 +139,7 @@ def edge_response(otf_slice, ifov, position, weights):
     else:
         integral = xr.dot(h, sine, dim="frequency")
     out = 0.5 + integral / np.pi
-    return _attrs(out, "1", "edge response", references="IBSM Eq. 3-63")
+    return named(out, "1", "edge response", references="IBSM Eq. 3-63")
 
 
 def relative_edge_response(otf_slice, ifov, weights):
@@ -168,7 +167,7 @@ def relative_edge_response(otf_slice, ifov, weights):
     """
     er = edge_response(otf_slice, ifov, RER_POSITIONS, weights)
     rer = er.sel(position=0.5, drop=True) - er.sel(position=-0.5, drop=True)
-    return _attrs(rer, "1", "relative edge response", references="IBSM Eq. 3-61")
+    return named(rer, "1", "relative edge response", references="IBSM Eq. 3-61")
 
 
 def _eho_from_er(er):
@@ -178,7 +177,7 @@ def _eho_from_er(er):
         er.sel(position=1.25, drop=True),
         er.max("position", skipna=False),
     )
-    return _attrs(eho, "1", "edge height overshoot", references="IBSM Eq. 3-60")
+    return named(eho, "1", "edge height overshoot", references="IBSM Eq. 3-60")
 
 
 def edge_height_overshoot(otf_slice, ifov, weights):
@@ -236,6 +235,6 @@ def edge_terms(otf_slice, ifov, weights):
     positions = np.concatenate([RER_POSITIONS, EHO_POSITIONS])
     er = edge_response(otf_slice, ifov, positions, weights)
     rer = er.sel(position=0.5, drop=True) - er.sel(position=-0.5, drop=True)
-    rer = _attrs(rer, "1", "relative edge response", references="IBSM Eq. 3-61")
+    rer = named(rer, "1", "relative edge response", references="IBSM Eq. 3-61")
     eho = _eho_from_er(er.sel(position=EHO_POSITIONS))
     return xr.Dataset({"rer": rer, "eho": eho})

@@ -20,11 +20,14 @@ import xarray as xr
 
 from xbsm import flags as _flags
 
+from .._metadata import named
+
 __all__ = [
     "GIQE3_CALIBRATION",
     "GIQE4_CALIBRATION",
     "GIQE5_CALIBRATION",
     "GIQE_CALIBRATIONS",
+    "GIQE_REFERENCES",
     "INCH",
     "GiqeCalibration",
     "giqe3",
@@ -39,9 +42,13 @@ __all__ = [
 INCH = 0.0254
 """One inch, the GSD unit inside every GIQE. [m]"""
 
-
-def _attrs(da, units, long_name, **extra):
-    return da.assign_attrs(units=units, long_name=long_name, **extra)
+GIQE_REFERENCES = MappingProxyType({
+    3: "IBSM Eq. 3-56",
+    4: "Leachtenauer et al., Applied Optics 36(32):8322, 1997",
+    5: "Harrington et al., NGA, General Image Quality Equation (GIQE) Version 5.0, 2015, Eq. 2",
+})
+"""The published source of each GIQE version's equation, by version (read-only): the
+``references`` attribute of its ``niirs``."""
 
 
 def _da(x):
@@ -114,8 +121,8 @@ class GiqeCalibration:
 
 
 _RANGE_FIELDS = ("snr", "rer", "gsd", "elevation", "niirs", "gsd_ground_plane", "q")
-_RANGE_UNITS = {"snr": "[1]", "rer": "[1]", "gsd": "[m]", "elevation": "[rad]",
-                "niirs": "[1]", "gsd_ground_plane": "[m]", "q": "[1]"}
+_RANGE_UNITS = MappingProxyType({"snr": "[1]", "rer": "[1]", "gsd": "[m]", "elevation": "[rad]",
+                                 "niirs": "[1]", "gsd_ground_plane": "[m]", "q": "[1]"})
 
 
 def _check_range(name, value):
@@ -272,7 +279,7 @@ def sampling_q(wavelength, aperture_diameter, ifov):
     NGA GIQE 5 report (2015), which assumes 1 <= Q <= 2.
     """
     q = _da(wavelength) / (_da(aperture_diameter) * _da(ifov))
-    return _attrs(q, "1", "sampling ratio Q = lambda N / p")
+    return named(q, "1", "sampling ratio Q = lambda N / p")
 
 
 def _outside(value, lo_hi):
@@ -385,7 +392,7 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
             11.81 + 3.32 * (np.log10(rer) - np.log10(gsd / INCH)) - 1.48 * eho - noise_gain / snr
         )
     niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & np.isfinite(niirs))
-    niirs = _attrs(niirs, "1", "NIIRS (GIQE 3)", references="IBSM Eq. 3-56")
+    niirs = named(niirs, "1", "NIIRS (GIQE 3)", references=GIQE_REFERENCES[3])
     fl = giqe_flags(snr=snr, rer=rer, gsd=gsd, elevation=elevation, niirs=niirs,
                     calibration=calibration)
     return xr.Dataset({"niirs": niirs, "flags": fl})
@@ -464,8 +471,9 @@ def giqe4(
             - noise_coefficient * noise_gain / snr
         )
     niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & (sin_el > 0) & np.isfinite(niirs))
-    niirs = _attrs(niirs, "1", "NIIRS (GIQE 4)", references="Leachtenauer et al. 1997")
-    gsd_gp = _attrs(gsd_gp, "m", "ground-plane geometric-mean GSD")
+    niirs = named(niirs, "1", "NIIRS (GIQE 4)", references=GIQE_REFERENCES[4])
+    gsd_gp = named(gsd_gp, "m", "ground-plane geometric-mean GSD",
+                   references=GIQE_REFERENCES[4])
     fl = giqe_flags(
         snr=snr, rer=rer, gsd=gsd_gp, elevation=elevation, niirs=niirs, calibration=calibration
     )
@@ -495,7 +503,8 @@ def giqe5_rer(rer_x, rer_y):
     hi, lo = np.maximum(rer_x, rer_y), np.minimum(rer_x, rer_y)
     with np.errstate(invalid="ignore"):
         out = (hi * lo**2.0) ** (1.0 / 3.0)
-    return _attrs(out, "1", "GIQE 5 weighted relative edge response")
+    return named(out, "1", "GIQE 5 weighted relative edge response",
+                 references="Harrington et al., NGA GIQE 5.0, 2015, Eq. 7")
 
 
 def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q=None):
@@ -555,8 +564,9 @@ def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q
             - 1.8 / snr
         )
     niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & (sin_el > 0) & np.isfinite(niirs))
-    niirs = _attrs(niirs, "1", "NIIRS (GIQE 5)", references="NGA GIQE 5, 2015")
-    gsd_w = _attrs(gsd_w, "m", "elevation-weighted GSD")
+    niirs = named(niirs, "1", "NIIRS (GIQE 5)", references=GIQE_REFERENCES[5])
+    gsd_w = named(gsd_w, "m", "elevation-weighted GSD",
+                  references="Harrington et al., NGA GIQE 5.0, 2015, Eq. 5")
     with np.errstate(divide="ignore", invalid="ignore"):
         gsd_gp = (gsd / (sin_el**0.5)).where(sin_el > 0)
     fl = giqe_flags(

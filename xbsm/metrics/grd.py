@@ -11,14 +11,11 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._metadata import named
 from .edge import _check_slice
 from .pybsm_numerics import _np_interp_reversed
 
 __all__ = ["ground_resolved_distance"]
-
-
-def _attrs(da, units, long_name, **extra):
-    return da.assign_attrs(units=units, long_name=long_name, **extra)
 
 
 def _first_crossing(mtf, freq, threshold):
@@ -67,7 +64,8 @@ def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first
         is resolved); SNR <= 0 gives NaN.
         ``"pybsm"``: pyBSM 0.16.1's rule, ``numpy.interp`` on the reversed MTF
         with frequencies :math:`k\,\Delta f` and a +1e-12 guard; silently
-        wrong for non-monotonic MTFs, kept for parity.
+        wrong for non-monotonic MTFs, kept for parity. SNR <= 0 gives NaN
+        (pyBSM raises).
 
     Returns
     -------
@@ -94,6 +92,7 @@ def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first
         u_r = _np_interp_reversed(mtf, freq, threshold, n) + 1e-12
         with np.errstate(divide="ignore"):
             grd = slant_range * np.maximum(1.0 / u_r, 2.0 * ifov)
+        grd = grd.where(snr > 0)  # pyBSM raises at SNR 0; no SNR <= 0 resolves anything
     elif method == "first_crossing":
         u_r = _first_crossing(mtf, freq, threshold)
         with np.errstate(divide="ignore"):
@@ -102,4 +101,4 @@ def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first
         grd = grd.where(snr > 0)
     else:
         raise ValueError(f"method must be 'first_crossing' or 'pybsm', got {method!r}")
-    return _attrs(grd, "m", "ground resolved distance", references="IBSM Eq. 3-54")
+    return named(grd, "m", "ground resolved distance", references="IBSM Eq. 3-54")

@@ -6,7 +6,8 @@ import numpy as np
 import xarray as xr
 from scipy.special import jv
 
-from .spectral import _finish, _finite, _positive, _require
+from .._metadata import described
+from .spectral import _finite, _positive, _require
 
 __all__ = ["circular_aperture", "defocused_aperture", "defocus_wavefront_coefficient"]
 
@@ -69,7 +70,7 @@ def circular_aperture(fx, fy, wavelength, aperture_diameter, obscuration_ratio=0
     unobscured = _diffraction_term(nu)
     eta = obscuration_ratio
     if not isinstance(eta, xr.DataArray) and eta == 0:
-        return _finish(unobscured, circular_aperture)
+        return described(unobscured, circular_aperture)
     # eta = 0 entries of a sweep: every obscured term vanishes; guard the divisions only.
     eta_safe = xr.where(eta > 0, eta, 1.0) if isinstance(eta, xr.DataArray) else eta
     eta2 = eta**2
@@ -88,7 +89,7 @@ def circular_aperture(fx, fy, wavelength, aperture_diameter, obscuration_ratio=0
         overlap = xr.where(eta > 0, overlap, 0.0)
         inner = xr.where(eta > 0, inner, 0.0)
     out = (unobscured + inner + overlap) / (1.0 - eta2)
-    return _finish(out, circular_aperture)
+    return described(out, circular_aperture)
 
 
 def defocus_wavefront_coefficient(focus_shift, aperture_diameter, focal_length):
@@ -119,7 +120,7 @@ def defocus_wavefront_coefficient(focus_shift, aperture_diameter, focal_length):
     _positive("focal_length", focal_length)
     f_number = focal_length / aperture_diameter
     out = focus_shift / (2.0 * (1.0 + 4.0 * f_number**2))
-    return _finish(out, defocus_wavefront_coefficient, units="m")
+    return described(out, defocus_wavefront_coefficient, units="m")
 
 
 def _hopkins_terms(a_max: float) -> int:
@@ -220,4 +221,4 @@ def defocused_aperture(fx, fy, wavelength, aperture_diameter, defocus_waves=None
     if not isinstance(waves, xr.DataArray):
         waves = xr.DataArray(waves)
     out = xr.apply_ufunc(_hopkins_kernel, s, waves, dask="parallelized", output_dtypes=[float])
-    return _finish(out, defocused_aperture)
+    return described(out, defocused_aperture)

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .spectral import _finish, _nonnegative, _positive
+from .._metadata import described
+from .spectral import _nonnegative, _positive
 
 __all__ = ["gaussian_defocus", "object_domain_defocus_radius", "image_domain_defocus_radius"]
 
@@ -36,7 +37,7 @@ def gaussian_defocus(fx, fy, blur_radius_x, blur_radius_y):
     _nonnegative("blur_radius_x", blur_radius_x)
     _nonnegative("blur_radius_y", blur_radius_y)
     out = np.exp((-(np.pi**2) / 4.0) * (blur_radius_x**2 * fx**2 + blur_radius_y**2 * fy**2))
-    return _finish(out, gaussian_defocus)
+    return described(out, gaussian_defocus)
 
 
 def object_domain_defocus_radius(aperture_diameter, object_range, focus_range):
@@ -66,7 +67,7 @@ def object_domain_defocus_radius(aperture_diameter, object_range, focus_range):
     _positive("object_range", object_range)
     _positive("focus_range", focus_range)
     out = 0.62 * aperture_diameter * np.abs(1.0 / object_range - 1.0 / focus_range)
-    return _finish(out, object_domain_defocus_radius, units="rad")
+    return described(out, object_domain_defocus_radius, units="rad")
 
 
 def image_domain_defocus_radius(aperture_diameter, focus_shift, focal_length):
@@ -95,4 +96,4 @@ def image_domain_defocus_radius(aperture_diameter, focus_shift, focal_length):
     _positive("aperture_diameter", aperture_diameter)
     _positive("focal_length", focal_length)
     out = 0.62 * aperture_diameter * np.abs(focus_shift) / focal_length**2
-    return _finish(out, image_domain_defocus_radius, units="rad")
+    return described(out, image_domain_defocus_radius, units="rad")

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .spectral import _finish, _positive, _require, _sinc
+from .._metadata import described
+from .spectral import _positive, _require, _sinc
 
 __all__ = ["detector", "aggregated_detector", "charge_transfer", "diffusion"]
 
@@ -37,7 +38,7 @@ def detector(fx, fy, detector_width_x, detector_width_y, focal_length):
     _positive("detector_width_y", detector_width_y)
     _positive("focal_length", focal_length)
     out = _sinc(detector_width_x / focal_length * fx) * _sinc(detector_width_y / focal_length * fy)
-    return _finish(out, detector)
+    return described(out, detector)
 
 
 def _aggregation_factor(frequency, pitch, focal_length, n):
@@ -102,7 +103,7 @@ def aggregated_detector(
         * _aggregation_factor(fy, pixel_pitch_y, focal_length, n)
         * pixel
     )
-    return _finish(out, aggregated_detector)
+    return described(out, aggregated_detector)
 
 
 def charge_transfer(
@@ -160,7 +161,7 @@ def charge_transfer(
         )
 
     out = axis(transfers_x, pixel_pitch_x, fx) * axis(transfers_y, pixel_pitch_y, fy)
-    return _finish(out, charge_transfer)
+    return described(out, charge_transfer)
 
 
 def diffusion(fx, fy, absorption_coefficient, depletion_width, diffusion_length, focal_length):
@@ -208,4 +209,4 @@ def diffusion(fx, fy, absorption_coefficient, depletion_width, diffusion_length,
         return 1.0 - depletion / (1.0 + absorption_coefficient * diffusion_len)
 
     out = collected(length) / collected(diffusion_length)
-    return _finish(out, diffusion)
+    return described(out, diffusion)

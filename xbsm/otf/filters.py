@@ -7,7 +7,8 @@ import xarray as xr
 from scipy import fft as sp_fft
 from scipy.interpolate import RegularGridInterpolator
 
-from .spectral import _finish, _nonnegative, _positive
+from .._metadata import described
+from .spectral import _nonnegative, _positive
 
 __all__ = ["gaussian", "sharpening_filter", "FILTER_METHODS"]
 
@@ -44,7 +45,7 @@ def gaussian(fx, fy, blur_size_x, blur_size_y):
     _nonnegative("blur_size_x", blur_size_x)
     _nonnegative("blur_size_y", blur_size_y)
     out = np.exp(-np.pi * ((fx * blur_size_x) ** 2 + (fy * blur_size_y) ** 2))
-    return _finish(out, gaussian)
+    return described(out, gaussian)
 
 
 def _as_kernel(kernel) -> np.ndarray:
@@ -135,7 +136,7 @@ def sharpening_filter(fx, fy, kernel, ifov_x, ifov_y=None, method="dtft"):
             dask="parallelized",
             output_dtypes=[float],
         )
-        return _finish(out, sharpening_filter)
+        return described(out, sharpening_filter)
     if ifov_y is None:
         ifov_y = ifov_x
     rows, cols = k.shape
@@ -145,4 +146,4 @@ def sharpening_filter(fx, fy, kernel, ifov_x, ifov_y=None, method="dtft"):
     phase_x = np.exp(-2j * np.pi * (fx * ifov_x) * offset_x)
     phase_y = np.exp(-2j * np.pi * (fy * ifov_y) * offset_y)
     out = xr.dot(phase_y, weights, phase_x, dim=["kernel_y", "kernel_x"])
-    return _finish(out, sharpening_filter)
+    return described(out, sharpening_filter)

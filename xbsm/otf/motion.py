@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .spectral import _finish, _finite, _nonnegative, _positive, _require, _sinc
+from .._metadata import described
+from .spectral import _finite, _nonnegative, _positive, _require, _sinc
 
 __all__ = ["jitter", "drift", "tdi"]
 
@@ -35,7 +36,7 @@ def jitter(fx, fy, jitter_rms_x, jitter_rms_y):
     _nonnegative("jitter_rms_x", jitter_rms_x)
     _nonnegative("jitter_rms_y", jitter_rms_y)
     out = np.exp(-2.0 * np.pi**2 * (jitter_rms_x**2 * fx**2 + jitter_rms_y**2 * fy**2))
-    return _finish(out, jitter)
+    return described(out, jitter)
 
 
 def drift(fx, fy, drift_x, drift_y):
@@ -64,7 +65,7 @@ def drift(fx, fy, drift_x, drift_y):
     _finite("drift_x", drift_x)
     _finite("drift_y", drift_y)
     out = _sinc(drift_x * fx) * _sinc(drift_y * fy)
-    return _finish(out, drift)
+    return described(out, drift)
 
 
 def tdi(frequency, detector_width, focal_length, stages, rate_ratio, phases=1):
@@ -128,4 +129,4 @@ def tdi(frequency, detector_width, focal_length, stages, rate_ratio, phases=1):
         near_zero, np.cos(np.pi * m * y) / np.cos(np.pi * y), np.sin(np.pi * m * y) / (m * safe)
     )
     out = _sinc(x) * np.exp(-1j * np.pi * (m - 1.0) * y) * ratio
-    return _finish(out, tdi)
+    return described(out, tdi)

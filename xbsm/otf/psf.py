@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .spectral import _finish
+from .._metadata import described
 
 __all__ = ["otf_to_psf"]
 
@@ -86,4 +86,4 @@ def otf_to_psf(otf, fx_dim="fx", fy_dim="fy"):
         y=("y", (np.arange(ny) - ny // 2) / (ny * dfy), {"units": "rad"}),
         x=("x", (np.arange(nx) - nx // 2) / (nx * dfx), {"units": "rad"}),
     )
-    return _finish(out, otf_to_psf)
+    return described(out, otf_to_psf)

@@ -1,13 +1,16 @@
 """Spectral weighting of wavelength-dependent OTFs (paper Eq. 3).
 
-This module also holds the two small helpers every OTF module uses: input
-validation at the public boundary and the CF attributes of a result.
+This module also holds the input validation every OTF module uses at its
+public boundary; the CF attributes of a result come from
+:func:`xbsm._metadata.described` (the first docstring line is the ``long_name``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 import xarray as xr
+
+from .._metadata import described
 
 __all__ = ["spectral_average"]
 
@@ -64,17 +67,6 @@ def _sinc(x):
     return np.sinc(x)
 
 
-def _long_name(func) -> str:
-    return func.__doc__.strip().splitlines()[0].rstrip(".")
-
-
-def _finish(out, func, units: str = "1"):
-    """Attach CF ``units`` and ``long_name`` (the first docstring line of ``func``)."""
-    if isinstance(out, xr.DataArray):
-        return out.assign_attrs(units=units, long_name=_long_name(func))
-    return out
-
-
 def spectral_average(otf, weights, dim: str = "wavelength"):
     r"""Spectrally weighted OTF, the weights normalised to sum to one.
 
@@ -113,4 +105,4 @@ def spectral_average(otf, weights, dim: str = "wavelength"):
     _require("weights", weights.sum(dim), lambda a: a > 0, f"not all zero along {dim!r}")
     normalised = weights / weights.sum(dim)
     out = xr.dot(otf, normalised, dim=dim)
-    return _finish(out, spectral_average)
+    return described(out, spectral_average)

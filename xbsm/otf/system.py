@@ -17,6 +17,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from .._metadata import named
 from ..methods import Method
 from . import aperture, detector, filters, motion, turbulence, wavefront
 
@@ -26,10 +27,6 @@ _UNIT_X = xr.DataArray([1.0, 0.0], dims="orientation", coords={"orientation": OR
 _UNIT_Y = xr.DataArray([0.0, 1.0], dims="orientation", coords={"orientation": ORIENTATION})
 
 COMPONENTS = ("aperture", "turbulence", "detector", "jitter", "drift", "wavefront", "filter")
-
-
-def _named(da, long_name):
-    return da.assign_attrs(units="1", long_name=long_name)
 
 
 def spectral_bins(wavelength: xr.DataArray, weights: xr.DataArray, count: int):
@@ -132,23 +129,23 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
     turb = turbulence.polychromatic_turbulence(
         radial, zero, wl, w, diameter, r0_ref, exposure, sc["platform_speed"])
     turb = xr.where(turbulent, turb, 1.0)
-    r0_band = xr.where(
+    r0_band = named(xr.where(
         turbulent, turbulence.band_coherence_diameter(r0_ref, wl, w), np.inf
-    ).assign_attrs(units="m", long_name="band-weighted coherence diameter r0")
+    ), "m", "band-weighted coherence diameter r0")
 
     parts = {
-        "aperture": _named(ap, "aperture OTF"),
-        "turbulence": _named(turb, "turbulence OTF"),
-        "detector": _named(det, "detector OTF"),
-        "jitter": _named(jit, "jitter OTF"),
-        "drift": _named(dri, "drift OTF"),
-        "wavefront": _named(wav, "wavefront OTF"),
+        "aperture": named(ap, "1", "aperture OTF"),
+        "turbulence": named(turb, "1", "turbulence OTF"),
+        "detector": named(det, "1", "detector OTF"),
+        "jitter": named(jit, "1", "jitter OTF"),
+        "drift": named(dri, "1", "drift OTF"),
+        "wavefront": named(wav, "1", "wavefront OTF"),
     }
     unfiltered = math.prod(parts.values())
-    parts["filter"] = _named(fil, "post-processing filter OTF")
+    parts["filter"] = named(fil, "1", "post-processing filter OTF")
     out = xr.Dataset(parts)
-    out["system_unfiltered"] = _named(unfiltered, "system OTF without the filter")
-    out["system"] = _named(unfiltered * fil, "system OTF")
+    out["system_unfiltered"] = named(unfiltered, "1", "system OTF without the filter")
+    out["system"] = named(unfiltered * fil, "1", "system OTF")
     out["coherence_diameter"] = r0_band
     return out
 

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._metadata import described
 from ..geometry import altitude_along_path
-from .spectral import _finish, _nonnegative, _positive, _require, spectral_average
+from .spectral import _nonnegative, _positive, _require, spectral_average
 
 __all__ = [
     "hufnagel_valley",
@@ -57,7 +58,7 @@ def hufnagel_valley(altitude, high_altitude_wind_speed=21.0, cn2_at_1m=1.7e-14):
         + 2.7e-16 * np.exp(-h / 1500.0)
         + cn2_at_1m * np.exp(-h / 100.0)
     )
-    return _finish(out, hufnagel_valley, units="m-2/3")
+    return described(out, hufnagel_valley, units="m-2/3")
 
 
 def _r0_from_integral(integral, wavelength):
@@ -102,7 +103,7 @@ def path_coherence_diameter(cn2, wavelength=REFERENCE_WAVELENGTH, path_dim="path
     z = cn2[path_dim]
     integral = (cn2 * (z / z.max()) ** (5.0 / 3.0)).integrate(path_dim)
     out = _r0_from_integral(integral, wavelength)
-    return _finish(out, path_coherence_diameter, units="m")
+    return described(out, path_coherence_diameter, units="m")
 
 
 def _path_nodes(path_samples, rule):
@@ -198,7 +199,7 @@ def slant_path_coherence_diameter(
     cn2 = hufnagel_valley(heights, high_altitude_wind_speed, cn2_at_1m)
     integral = xr.dot(cn2, w * t ** (5.0 / 3.0), dim="path") * slant_range
     out = _r0_from_integral(integral, wavelength)
-    return _finish(out, slant_path_coherence_diameter, units="m")
+    return described(out, slant_path_coherence_diameter, units="m")
 
 
 def scale_coherence_diameter(
@@ -228,7 +229,7 @@ def scale_coherence_diameter(
     _positive("wavelength", wavelength)
     _positive("reference_wavelength", reference_wavelength)
     out = coherence_diameter * (wavelength / reference_wavelength) ** (6.0 / 5.0)
-    return _finish(out, scale_coherence_diameter, units="m")
+    return described(out, scale_coherence_diameter, units="m")
 
 
 def band_coherence_diameter(
@@ -260,7 +261,7 @@ def band_coherence_diameter(
     """
     r0 = scale_coherence_diameter(coherence_diameter, wavelength, reference_wavelength)
     out = spectral_average(r0, weights)
-    return _finish(out, band_coherence_diameter, units="m")
+    return described(out, band_coherence_diameter, units="m")
 
 
 def turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, exposure_coefficient=0.0):
@@ -307,7 +308,7 @@ def turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, exposu
         * (wavelength / coherence_diameter * rho) ** (5.0 / 3.0)
         * (1.0 - exposure_coefficient * (wavelength / aperture_diameter * rho) ** (1.0 / 3.0))
     )
-    return _finish(out, turbulence)
+    return described(out, turbulence)
 
 
 def wind_blended_turbulence(
@@ -348,7 +349,7 @@ def wind_blended_turbulence(
     short = turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, 0.5)
     long = turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, 0.0)
     out = weight * short + (1.0 - weight) * long
-    return _finish(out, wind_blended_turbulence)
+    return described(out, wind_blended_turbulence)
 
 
 def polychromatic_turbulence(
@@ -408,7 +409,7 @@ def polychromatic_turbulence(
         input_core_dims=[[], [], [], [], [], [], ["wavelength"], ["wavelength"]],
         dask="parallelized", output_dtypes=[float],
     )
-    return _finish(out, polychromatic_turbulence)
+    return described(out, polychromatic_turbulence)
 
 
 def _polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, wl, w):

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .spectral import _finish, _is_lazy
+from .._metadata import described
+from .spectral import _is_lazy
 
 __all__ = ["user_defined", "OUTSIDE_RULES"]
 
@@ -115,4 +116,4 @@ def user_defined(fx, fy, table, outside="zero"):
         raise ValueError(
             f"table must have dimension 'frequency' or dimensions 'fx' and 'fy'; got {table.dims}"
         )
-    return _finish(out, user_defined)
+    return described(out, user_defined)

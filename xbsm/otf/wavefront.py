@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .spectral import _finish, _nonnegative, _positive, _require
+from .._metadata import described
+from .spectral import _nonnegative, _positive, _require
 
 __all__ = ["random_phase_wavefront", "shannon_wavefront"]
 
@@ -63,7 +64,7 @@ def random_phase_wavefront(
         -(wavelength**2) * ((fx / correlation_length_x) ** 2 + (fy / correlation_length_y) ** 2)
     )
     out = np.exp(-variance * (1.0 - correlation))
-    return _finish(out, random_phase_wavefront)
+    return described(out, random_phase_wavefront)
 
 
 def shannon_wavefront(fx, fy, wavelength, aperture_diameter, rms_wavefront_error, clip=True):
@@ -107,4 +108,4 @@ def shannon_wavefront(fx, fy, wavelength, aperture_diameter, rms_wavefront_error
     if clip:
         nu = np.minimum(nu, 1.0)
     out = 1.0 - (rms_wavefront_error / 0.18) ** 2 * (1.0 - 4.0 * (nu - 0.5) ** 2)
-    return _finish(out, shannon_wavefront)
+    return described(out, shannon_wavefront)
