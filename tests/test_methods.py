@@ -211,5 +211,5 @@ def test_every_knob_rejects_a_bad_value_when_the_method_is_made(knob):
 
 
 def test_misspelt_knob_gets_the_closest_names():
-    with pytest.raises(ValueError, match="did you mean nodes_per_panel"):
+    with pytest.raises(ValueError, match="did you mean 'nodes_per_panel'"):
         xbsm.method("accurate", nodes_per_pannel=12)

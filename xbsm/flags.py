@@ -22,11 +22,13 @@ question a user has:
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 import numpy as np
 import xarray as xr
 
 # bit -> (meaning, description). The meanings are CF flag_meanings words.
-FLAGS: dict[str, tuple[int, str]] = {
+FLAGS = MappingProxyType({
     "beyond_database": (
         1,
         "no atmosphere data for this geometry (beyond the horizon or outside the "
@@ -63,7 +65,7 @@ FLAGS: dict[str, tuple[int, str]] = {
         "GIQE 5 only: sampling ratio Q = lambda N / p (lambda the band centre) outside "
         "the 1-2 the GIQE 5 report assumes",
     ),
-}
+})
 
 INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive")
 """Bits saying a number is NaN or may be wrong."""
@@ -135,3 +137,33 @@ def is_invalid(flags: xr.DataArray) -> xr.DataArray:
 def is_outside_calibration(flags: xr.DataArray) -> xr.DataArray:
     """Boolean DataArray: where any :data:`CALIBRATION` bit is set (the GIQE is extrapolated)."""
     return (flags & np.int32(CALIBRATION_MASK)) != 0
+
+
+def decode(flags: xr.DataArray) -> xr.Dataset:
+    """One boolean variable per flag name: where that bit of ``flags`` is set.
+
+    Parameters
+    ----------
+    flags : xr.DataArray
+        A ``flags`` variable of an xbsm result (any dims; dask stays lazy).
+
+    Returns
+    -------
+    xr.Dataset
+        A boolean variable for every name of :data:`FLAGS`, plus ``invalid`` and
+        ``outside_calibration`` (any bit of :data:`INVALID` / :data:`CALIBRATION`),
+        on the dims of ``flags``.
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> bits = decode(xr.DataArray([0, 4 | 512], dims="case"))
+    >>> bits.snr_nonpositive.values.tolist(), bits.invalid.values.tolist()
+    ([False, True], [False, True])
+    """
+    described = {name: (has_flag(flags, name), FLAGS[name][1]) for name in FLAGS}
+    described["invalid"] = (is_invalid(flags), "any bit saying the number is NaN or may be wrong")
+    described["outside_calibration"] = (
+        is_outside_calibration(flags), "any bit saying a GIQE is used outside its calibration")
+    return xr.Dataset({name: value.assign_attrs(long_name=text, units="1")
+                       for name, (value, text) in described.items()})

@@ -11,13 +11,13 @@ overridden one by one::
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import numbers
 from dataclasses import dataclass
 from types import MappingProxyType
 
 from .atmosphere import INTERPOLATIONS
 from .constants import CODATA, PYBSM_CODATA_2014, Constants
+from .params import unknown_keyword
 
 #: Allowed values of every text knob.
 KNOB_CHOICES = MappingProxyType({
@@ -39,6 +39,7 @@ KNOB_INTEGERS = MappingProxyType({
     "min_panels": (1, 10_000),
     "otf_wavelengths": (0, 10_000),
     "turbulence_path_samples": (2, 1_000_000),
+    "max_frequency_nodes": (10, 100_000_000),
 })
 #: Allowed range of every real-valued knob: (low, high, low is inclusive).
 KNOB_REALS = MappingProxyType({
@@ -103,6 +104,10 @@ class Method:
     """gauss_legendre: panels per period of sin(2 pi f ifov x) at x = 3 px."""
     min_panels: int
     """gauss_legendre: fewest panels over [0, D / lambda_min]."""
+    max_frequency_nodes: int
+    """gauss_legendre: most nodes a sensor's edge-response rule may need before the call is
+    refused (a pitch of 1 m instead of 1 um asks for millions and gigabytes); 200,000 is
+    Q = lambda F / p down to about 1.5e-4 with the accurate knobs."""
     otf_wavelengths: int
     """Most wavelengths used for the polychromatic OTFs (aperture, turbulence, wavefront);
     0 = every database wavelength of the band. Fewer bins the spectral weights."""
@@ -136,21 +141,32 @@ class Method:
         for field in dataclasses.fields(self):
             _check_knob(field.name, getattr(self, field.name))
 
+    def overrides(self) -> dict:
+        """Knobs that differ from the preset of the same name (every knob if none has it)."""
+        base = PRESETS.get(self.name)
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+                if f.name != "name" and (base is None or getattr(self, f.name) != getattr(
+                    base, f.name))}
+
+    def describe(self) -> str:
+        """The method as text for a result's attributes, e.g. ``pybsm (frequency_samples=201)``."""
+        changed = ", ".join(f"{k}={getattr(v, 'name', v)!s}" for k, v in self.overrides().items())
+        return f"{self.name} ({changed})" if changed else self.name
+
     def edge_quadrature_knobs(self) -> dict:
         """The knobs of :func:`xbsm.quadrature.edge_quadrature`, as plain values."""
         return dict(rule=self.edge_rule, grid_size=self.frequency_samples,
                     nodes_per_panel=self.nodes_per_panel,
                     panels_per_oscillation=self.panels_per_oscillation,
-                    min_panels=self.min_panels, name=self.name)
+                    min_panels=self.min_panels, name=self.name,
+                    max_nodes=self.max_frequency_nodes)
 
     def replace(self, **knobs) -> Method:
         """A copy with some knobs changed."""
         known = self.knobs()
         for name in knobs:
             if name not in known:
-                close = difflib.get_close_matches(name, known, n=3)
-                hint = f"did you mean {' or '.join(close)}?" if close else f"known: {known}"
-                raise ValueError(f"unknown method knob {name!r}; {hint}")
+                raise unknown_keyword("method knob", name, known)
         return dataclasses.replace(self, **knobs)
 
     @classmethod
@@ -170,6 +186,7 @@ _PRESETS: dict[str, Method] = {
         nodes_per_panel=10,
         panels_per_oscillation=1.0,
         min_panels=8,
+        max_frequency_nodes=200_000,
         otf_wavelengths=0,
         edge_otf="abs",
         giqe4_noise_coefficient=0.334,
@@ -190,6 +207,7 @@ _PRESETS: dict[str, Method] = {
         nodes_per_panel=10,
         panels_per_oscillation=1.0,
         min_panels=8,
+        max_frequency_nodes=200_000,
         otf_wavelengths=0,
         edge_otf="real",
         giqe4_noise_coefficient=0.344,

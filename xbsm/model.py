@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 
 from . import flags as fl
-from . import geometry, metrics, noise, radiometry
+from . import geometry, metrics, noise, params, radiometry
 from .atmosphere import band_atmosphere
 from .methods import Method
 from .methods import method as resolve_method
@@ -19,13 +19,16 @@ from .params import check_inputs
 from .quadrature import edge_nodes, optics_cutoff, undersampled
 
 
-def _result(variables: dict, **attrs) -> xr.Dataset:
-    """A result Dataset without scalar coordinates.
+def _result(variables: dict, m: Method, **attrs) -> xr.Dataset:
+    """A result Dataset without scalar coordinates, saying which method made it.
+
+    The ``method`` attribute names the preset and every knob that differs from it.
 
     An output that repeats an input swept on a dimension of its own name (``read_noise``
     swept on ``read_noise``) is left to that coordinate, which holds the same values.
     """
     dims = {d for v in variables.values() for d in v.dims}
+    attrs = {"method": m.describe(), **attrs}
     ds = xr.Dataset({k: v for k, v in variables.items() if k not in dims}, attrs=attrs)
     return ds.drop_vars([c for c in ds.coords if ds[c].ndim == 0 and c not in ds.dims])
 
@@ -85,7 +88,7 @@ def _snr(sensor: xr.Dataset, scenario: xr.Dataset, m: Method, targets: str) -> x
         **{name: noise_[name] for name in noise_.data_vars if name not in ("snr", "snr_frame")},
         "spectral_weights": signal["spectral_weights"],
         "flags": flags,
-    }, method=m.name, targets=targets)
+    }, m, targets=targets)
 
 
 def _band_atmosphere(sensor: xr.Dataset, scenario: xr.Dataset, m: Method) -> xr.Dataset:
@@ -137,10 +140,12 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
     if reflectance is None:
         reflectance = np.linspace(0.0, 1.0, 100)
     if not isinstance(reflectance, xr.DataArray):
-        values = np.asarray(reflectance, dtype=float)
+        values = np.atleast_1d(np.asarray(reflectance))
         reflectance = xr.DataArray(values, dims="reflectance", coords={"reflectance": values})
-    if integration_time is None:
-        integration_time = s["integration_time"]
+    reflectance = params.argument("reflectance", reflectance, allowed_dims=("reflectance",))
+    temperature = params.argument("temperature", temperature)
+    integration_time = (s["integration_time"] if integration_time is None
+                        else params.argument("integration_time", integration_time))
     atm = _band_atmosphere(s, scenario, m)
     band = radiometry.sensor_band_terms(s, atm["wavelength"], k)
     radiance = radiometry.total_radiance(atm, reflectance, temperature, k)
@@ -161,7 +166,7 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
         "spectral_weights": (brightest / brightest.max("wavelength")).assign_attrs(
             units="1", long_name="normalised spectral photoelectron rate"),
         "flags": flags,
-    }, method=m.name)
+    }, m)
 
 
 GIQE_VERSIONS = (3, 4, 5)
@@ -240,7 +245,7 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
         **{name: giqe[name] for name in giqe.data_vars if name not in ("niirs", "flags")},
         **{name: view[name] for name in ("slant_range", "elevation_angle")},
         "flags": flags.astype(np.int32).assign_attrs(fl.flag_attrs("NIIRS validity flags")),
-    }, method=m.name)
+    }, m)
 
 
 def _viewing_geometry(s: xr.Dataset, sc: xr.Dataset, m: Method) -> xr.Dataset:
@@ -330,7 +335,9 @@ def _giqe_terms(s: xr.Dataset, r: xr.Dataset, view: xr.Dataset, edges: xr.Datase
 
     return xr.Dataset({
         "niirs": by_version("niirs").assign_attrs(
-            units="1", long_name="National Imagery Interpretability Rating Scale"),
+            units="1", long_name="National Imagery Interpretability Rating Scale",
+            references="; ".join(f"GIQE {v}: {metrics.GIQE_REFERENCES[v]}"
+                                 for v in GIQE_VERSIONS)),
         "flags": by_version("flags"),
         "rer_giqe5": g5["rer"].assign_attrs(units="1", long_name="GIQE 5 relative edge response"),
         "gsd": gsd,
@@ -362,7 +369,9 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method=
     xr.Dataset
         ``aperture``, ``turbulence``, ``detector``, ``jitter``, ``drift``,
         ``wavefront``, ``filter``, ``system``, ``system_unfiltered``,
-        ``coherence_diameter``; slices carry an ``orientation`` dim (x, y).
+        ``coherence_diameter``; slices carry an ``orientation`` dim (x, y);
+        ``flags`` (those of the radiometry: ``beyond_database`` where the spectral
+        weights, and so the polychromatic OTFs, are undefined).
     """
     check_inputs(sensor, scenario)
     m = resolve_method(method)
@@ -372,11 +381,28 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method=
         cutoff = float(_optics_cutoff(sensor, weights["wavelength"]).max())
         frequency = np.linspace(0.0, cutoff, 201)
     if not isinstance(frequency, xr.DataArray):
-        frequency = np.asarray(frequency, dtype=float)
-        frequency = xr.DataArray(frequency, dims="frequency", coords={"frequency": frequency},
-                                 attrs={"units": "cycles/rad", "long_name": "spatial frequency"})
+        frequency = np.atleast_1d(np.asarray(frequency))
+        frequency = xr.DataArray(frequency, dims="frequency", coords={"frequency": frequency})
+    frequency = _frequency_argument("frequency", frequency)
+    if "frequency" in frequency.coords:
+        frequency["frequency"].attrs.update(units="cycles/rad", long_name="spatial frequency")
+    if fy is not None:
+        fy = _frequency_argument("fy", fy)
     slant = geometry.slant_range(scenario["ground_range"], scenario["altitude"], form=m.geometry)
     out = system_components(sensor, scenario, frequency, spectral_weights=_otf_weights(weights),
                             integration_time=r["effective_integration_time"], slant_range=slant,
                             method=m, fy=fy)
-    return _result(dict(out.data_vars), method=m.name)
+    return _result({**out.data_vars, "flags": r["flags"]}, m)
+
+
+MAX_FREQUENCIES = 1_000_000
+"""Most frequencies :func:`system_otf` evaluates per call (each costs a wavelength axis)."""
+
+
+def _frequency_argument(name, values: xr.DataArray) -> xr.DataArray:
+    """Finite frequencies on any dims but xbsm's own 2-D ones, and not absurdly many."""
+    if values.size > MAX_FREQUENCIES:
+        raise ValueError(f"{name} has {values.size} values; at most {MAX_FREQUENCIES} per call "
+                         "(xbsm.model.MAX_FREQUENCIES): evaluate the grid in pieces")
+    out = params.argument("frequency", values, allowed_dims=tuple(values.dims))
+    return out.rename(name) if name != "frequency" else out

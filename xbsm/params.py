@@ -17,8 +17,12 @@ are never modified.
 
 from __future__ import annotations
 
+import difflib
+import functools
+import inspect
 import math
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 import xarray as xr
@@ -277,12 +281,36 @@ def _check_band_overlap(name: str, curve: xr.DataArray, low: float, high: float)
         raise ValueError(f"{name} is zero over the whole band [{low:g}, {high:g}] m: no signal")
 
 
+def unknown_keyword(kind: str, given: str, known) -> ValueError:
+    """The error for a keyword that does not exist, suggesting the closest names."""
+    close = difflib.get_close_matches(given, list(known), n=3)
+    hint = f"did you mean {' or '.join(map(repr, close))}?" if close else (
+        f"known: {', '.join(sorted(known))}")
+    return ValueError(f"unknown {kind} {given!r}; {hint}")
+
+
+def _suggesting(func):
+    """Turn Python's 'unexpected keyword argument' into one that names the closest keywords."""
+    signature = inspect.signature(func)
+
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        for name in kwargs:
+            if name not in signature.parameters:
+                raise unknown_keyword(f"xbsm.{func.__name__} keyword", name,
+                                      signature.parameters)
+        return func(*args, **kwargs)
+
+    return wrapper
+
+
 def _finish(values: dict[str, xr.DataArray], kind: str) -> xr.Dataset:
     ds = xr.Dataset(values)
     ds.attrs["xbsm_kind"] = kind
     return ds
 
 
+@_suggesting
 def sensor(
     *,
     aperture_diameter,
@@ -450,6 +478,7 @@ def _kernel(kernel) -> xr.DataArray:
     return out.assign_attrs(units="1", long_name="post-processing filter kernel")
 
 
+@_suggesting
 def scenario(
     *,
     altitude,
@@ -502,6 +531,20 @@ def scenario(
                 f"got {vis.values[unknown].ravel()[0]!r}"
             )
     return _finish(values, "scenario")
+
+
+#: Arguments of model calls that are not sensor or scenario parameters.
+ARGUMENT_SPECS = MappingProxyType({
+    "reflectance": Spec("1", "target reflectance", **FRACTION),
+    "temperature": Spec("K", "target temperature", **POSITIVE),
+    "integration_time": SENSOR_SPECS["integration_time"],
+    "frequency": Spec("cycles/rad", "angular spatial frequency"),
+})
+
+
+def argument(name: str, value, allowed_dims=()) -> xr.DataArray:
+    """Validate a model-call argument (:data:`ARGUMENT_SPECS`) like a parameter."""
+    return _validated(name, value, ARGUMENT_SPECS[name], allowed_dims)
 
 
 def check_kind(ds: xr.Dataset, kind: str, argument: str) -> None:

@@ -114,11 +114,9 @@ def sensor(**kw) -> xr.Dataset:
     ``other_irradiance`` becomes xbsm's stray irradiance (pyBSM 0.16.1 stores
     it but never uses it).
     """
-    unknown = set(kw) - set(SENSOR_NAMES)
-    if unknown:
-        raise ValueError(
-            f"unknown pyBSM Sensor keyword(s) {sorted(unknown)}; known: {sorted(SENSOR_NAMES)}"
-        )
+    for key in kw:
+        if key not in SENSOR_NAMES:
+            raise params.unknown_keyword("pyBSM Sensor keyword", key, SENSOR_NAMES)
     for required in ("D", "f", "p_x", "opt_trans_wavelengths"):
         if required not in kw:
             raise ValueError(f"pyBSM Sensor keyword {required!r} is required")
@@ -137,6 +135,8 @@ def sensor(**kw) -> xr.Dataset:
         )
     qe = kw.pop("qe", None)
     qe_wavelengths = kw.pop("qe_wavelengths", None)
+    if qe is None and qe_wavelengths is not None:
+        qe = np.ones(np.shape(qe_wavelengths))  # pyBSM: QE 1 over qe_wavelengths, 0 elsewhere
     if qe is not None:
         out["quantum_efficiency"] = _curve(
             qe, band if qe_wavelengths is None else qe_wavelengths, "qe", "qe_wavelengths"
@@ -173,12 +173,9 @@ def scenario(**kw) -> xr.Dataset:
     xr.Dataset
         As :func:`xbsm.scenario`.
     """
-    unknown = set(kw) - set(SCENARIO_NAMES)
-    if unknown:
-        raise ValueError(
-            f"unknown pyBSM Scenario keyword(s) {sorted(unknown)}; "
-            f"known: {sorted(SCENARIO_NAMES)}"
-        )
+    for key in kw:
+        if key not in SCENARIO_NAMES:
+            raise params.unknown_keyword("pyBSM Scenario keyword", key, SCENARIO_NAMES)
     for required in ("ihaze", "altitude", "ground_range"):
         if required not in kw:
             raise ValueError(f"pyBSM Scenario keyword {required!r} is required")

@@ -1,0 +1,249 @@
+"""Bad input at every public entry point: a clear error naming the parameter, or a flag.
+
+One row per case. An error row names the exception, the parameter the message must
+name, and a fragment of the allowed range or choices it must state; a flag row names
+the flag bit the result must carry. Built from the parameter tables, so a new
+parameter is covered the day it is added.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import xbsm
+from xbsm import params
+from xbsm.flags import has_flag
+from xbsm.model import reflectance_to_photoelectrons
+
+BAND = dict(wavelength_min=0.55e-6, wavelength_max=0.85e-6)
+SENSOR = dict(aperture_diameter=0.275, focal_length=4.0, pixel_pitch_x=8e-6, **BAND,
+              integration_time=0.03, max_well=96000.0, max_well_fill=0.6)
+SCENARIO = dict(altitude=9000.0, ground_range=20e3, visibility=5.0)
+S = xbsm.sensor(**SENSOR)
+SC = xbsm.scenario(**SCENARIO)
+
+
+def _bad_values(spec: params.Spec):
+    """Values outside ``spec``: below, at an open end, infinite, NaN, not a real number."""
+    out = [math.inf, math.nan, "0.1", 1 + 2j, True]
+    if spec.low > -math.inf:
+        out.append(spec.low - 1.0)
+        if spec.low_open:
+            out.append(spec.low)
+    if spec.high < math.inf:
+        out.append(spec.high + 1.0)
+    return out
+
+
+def _rows(specs, make):
+    for name, spec in specs.items():
+        for value in _bad_values(spec):
+            yield pytest.param(make, name, value, id=f"{name}={value!r}")
+
+
+SPEC_ROWS = [
+    *_rows(params.SENSOR_SPECS, lambda **kw: xbsm.sensor(**{**SENSOR, **kw})),
+    *_rows(params.SCENARIO_SPECS, lambda **kw: xbsm.scenario(**{**SCENARIO, **kw})),
+]
+
+
+@pytest.mark.parametrize("make, name, value", SPEC_ROWS)
+def test_out_of_range_or_non_numeric_value_names_the_parameter(make, name, value):
+    with pytest.raises(ValueError) as err:
+        make(**{name: value})
+    message = str(err.value)
+    assert name in message
+    assert ("must lie in" in message or "real number" in message or "must be" in message
+            or "smaller than" in message), message
+
+
+def test_table_has_at_least_120_rows():
+    assert len(SPEC_ROWS) + len(OTHER_ROWS) >= 120
+
+
+@pytest.mark.parametrize("dim", params.RESERVED_DIMS)
+def test_each_reserved_dimension_name_is_refused(dim):
+    with pytest.raises(ValueError, match=f"swept on dimension '{dim}'"):
+        xbsm.scenario(**{**SCENARIO, "ground_range": xr.DataArray([0.0, 2e4], dims=dim)})
+
+
+def _edited(**changes):
+    return lambda: xbsm.snr(S.assign(**changes), SC)
+
+
+OTHER_ROWS = [
+    # (id, call, exception, fragment the message must contain)
+    ("sweep_on_another_parameter", lambda: xbsm.scenario(
+        **{**SCENARIO, "ground_range": xr.DataArray([0.0, 2e4], dims="altitude")}),
+     ValueError, "name of another parameter"),
+    ("empty_sweep", lambda: xbsm.sensor(**{**SENSOR, "focal_length": xr.DataArray(
+        [], dims="f")}), ValueError, "focal_length is an empty sweep"),
+    ("unlabelled_array", lambda: xbsm.sensor(**{**SENSOR, "focal_length": [1.0, 2.0]}),
+     ValueError, "focal_length must be a scalar or an xr.DataArray"),
+    ("units_unknown", lambda: xbsm.scenario(**{**SCENARIO, "ground_range": xr.DataArray(
+        [20.0], dims="g", attrs={"units": "furlong"})}), ValueError, "xbsm expects 'm'"),
+    ("units_of_another_kind", lambda: xbsm.sensor(**{**SENSOR, "jitter_x": xr.DataArray(
+        1.0, attrs={"units": "m"})}), ValueError, "jitter_x has units 'm'"),
+    ("qe_in_micrometres", lambda: xbsm.sensor(**{**SENSOR, "quantum_efficiency": xr.DataArray(
+        [0.6, 0.7], dims="wavelength", coords={"wavelength": [0.5, 0.9]})}),
+     ValueError, "micrometres"),
+    ("qe_zero_over_band", lambda: xbsm.sensor(**{**SENSOR, "quantum_efficiency": 0.0}),
+     ValueError, "quantum_efficiency is zero over the whole band"),
+    ("transmission_outside_band", lambda: xbsm.sensor(**{
+        **SENSOR, "optics_transmission": xr.DataArray(
+            [0.5, 0.5], dims="wavelength", coords={"wavelength": [3e-6, 5e-6]})}),
+     ValueError, "optics_transmission is given over"),
+    ("curve_wavelengths_decrease", lambda: xbsm.sensor(**{
+        **SENSOR, "quantum_efficiency": xr.DataArray(
+            [0.5, 0.5], dims="wavelength", coords={"wavelength": [0.8e-6, 0.6e-6]})}),
+     ValueError, "increase strictly"),
+    ("band_reversed", lambda: xbsm.sensor(**{**SENSOR, "wavelength_min": 0.9e-6}),
+     ValueError, "wavelength_min must be smaller than wavelength_max"),
+    ("band_swept", lambda: xbsm.sensor(**{**SENSOR, "wavelength_min": xr.DataArray(
+        [0.5e-6, 0.55e-6], dims="b")}), ValueError, "band edges cannot be swept"),
+    ("visibility_not_in_database", lambda: xbsm.scenario(**{**SCENARIO, "visibility": 10.0}),
+     ValueError, "visibility must be one of"),
+    ("misspelt_sensor_keyword", lambda: xbsm.sensor(**SENSOR, focal_lenght=1.0),
+     ValueError, "did you mean 'focal_length'"),
+    ("misspelt_scenario_keyword", lambda: xbsm.scenario(**SCENARIO, visibilty=5.0),
+     ValueError, "did you mean 'visibility'"),
+    ("misspelt_pybsm_keyword", lambda: xbsm.pybsm_compat.sensor(
+        D=0.275, f=4.0, p_x=8e-6, opt_trans_wavelengths=np.array([0.55e-6, 0.85e-6]),
+        int_tme=0.03), ValueError, "did you mean 'int_time'"),
+    ("misspelt_method_knob", lambda: xbsm.method("accurate", nodes_per_pannel=3),
+     ValueError, "did you mean 'nodes_per_panel'"),
+    ("unknown_preset", lambda: xbsm.method("exact"), ValueError, "method must be one of"),
+    ("edited_aperture", _edited(aperture_diameter=-0.1), ValueError,
+     "aperture_diameter must lie in (0, inf) m"),
+    ("edited_qe", _edited(quantum_efficiency=2.0), ValueError,
+     "quantum_efficiency must lie in [0, 1]"),
+    ("edited_dims", lambda: xbsm.snr(S.assign(read_noise=xr.DataArray(
+        [1.0, 2.0], dims="fx")), SC), ValueError, "swept on dimension 'fx'"),
+    ("not_a_sensor", lambda: xbsm.snr(SC, SC), ValueError, "sensor must be the dataset"),
+    ("shared_dim_different_length", lambda: xbsm.snr(
+        xbsm.sensor(**{**SENSOR, "focal_length": xr.DataArray([3.0, 4.0], dims="case")}),
+        xbsm.scenario(**{**SCENARIO, "ground_range": xr.DataArray([0.0, 1e4, 2e4],
+                                                                   dims="case")})),
+     ValueError, "both sweep dimension 'case'"),
+    ("shared_dim_different_coords", lambda: xbsm.snr(
+        xbsm.sensor(**{**SENSOR, "focal_length": xr.DataArray(
+            [3.0, 4.0], dims="case", coords={"case": [0, 1]})}),
+        xbsm.scenario(**{**SCENARIO, "ground_range": xr.DataArray(
+            [0.0, 1e4], dims="case", coords={"case": [5, 6]})})),
+     ValueError, "different coordinate values"),
+    ("targets_unknown", lambda: xbsm.snr(S, SC, targets="tank"), ValueError,
+     "targets must be 'giqe' or 'scenario'"),
+    ("absurd_grid", lambda: xbsm.niirs(xbsm.sensor(**{**SENSOR, "pixel_pitch_x": 1.0}), SC),
+     ValueError, "max_frequency_nodes"),
+    ("otf_frequency_nan", lambda: xbsm.system_otf(S, SC, [0.0, np.nan]), ValueError,
+     "frequency must lie in"),
+    ("otf_frequency_inf", lambda: xbsm.system_otf(S, SC, [0.0, np.inf]), ValueError,
+     "frequency must lie in"),
+    ("otf_frequency_string", lambda: xbsm.system_otf(S, SC, ["a"]), ValueError,
+     "frequency must be a real number"),
+    ("otf_too_many_frequencies", lambda: xbsm.system_otf(S, SC, np.zeros(1_000_001)),
+     ValueError, "at most 1000000"),
+    ("reflectance_negative", lambda: reflectance_to_photoelectrons(S, SC, [-0.1, 0.5]),
+     ValueError, "reflectance must lie in [0, 1]"),
+    ("reflectance_above_one", lambda: reflectance_to_photoelectrons(S, SC, [0.5, 1.5]),
+     ValueError, "reflectance must lie in [0, 1]"),
+    ("reflectance_empty", lambda: reflectance_to_photoelectrons(S, SC, []), ValueError,
+     "reflectance is an empty sweep"),
+    ("reflectance_nan", lambda: reflectance_to_photoelectrons(S, SC, [np.nan]), ValueError,
+     "reflectance must lie in [0, 1]"),
+    ("temperature_zero", lambda: reflectance_to_photoelectrons(S, SC, temperature=0.0),
+     ValueError, "temperature must lie in (0, inf) K"),
+    ("integration_time_negative", lambda: reflectance_to_photoelectrons(
+        S, SC, integration_time=-1.0), ValueError, "integration_time must lie in (0, inf) s"),
+]
+
+
+@pytest.mark.parametrize("call, error, fragment",
+                         [pytest.param(c, e, f, id=i) for i, c, e, f in OTHER_ROWS])
+def test_bad_call_raises_a_clear_error(call, error, fragment):
+    with pytest.raises(error) as err:
+        call()
+    assert fragment in str(err.value), str(err.value)
+
+
+# --- inputs that are legitimate but odd: converted, promoted or flagged, never silent ------
+
+
+def test_units_attribute_is_converted():
+    km = xbsm.scenario(**{**SCENARIO, "ground_range": xr.DataArray(
+        [20.0], dims="g", attrs={"units": "km"})})
+    assert float(km.ground_range[0]) == 20e3
+    mm = xbsm.sensor(**{**SENSOR, "aperture_diameter": xr.DataArray(275.0,
+                                                                     attrs={"units": "mm"})})
+    assert float(mm.aperture_diameter) == pytest.approx(0.275, rel=1e-15)
+    urad = xbsm.sensor(**{**SENSOR, "jitter_x": xr.DataArray(0.5, attrs={"units": "urad"})})
+    assert float(urad.jitter_x) == pytest.approx(0.5e-6, rel=1e-15)
+
+
+@pytest.mark.parametrize("dtype", [np.float16, np.float32, np.int64])
+def test_low_precision_and_integer_inputs_are_promoted(dtype):
+    altitude = xr.DataArray(np.array([9000], dtype=dtype), dims="case")
+    sc = xbsm.scenario(**{**SCENARIO, "altitude": altitude, "ground_range": 0.0})
+    assert sc.altitude.dtype == np.float64
+    # the slant range at nadir is the altitude itself (float32 arithmetic gave 8688.9 m)
+    n = xbsm.niirs(S, sc)
+    assert float(n.slant_range[0]) == pytest.approx(9000.0, rel=1e-12)
+
+
+def test_sweep_on_the_parameters_own_name_keeps_every_output():
+    times = xr.DataArray([0.01, 0.03], dims="integration_time",
+                         coords={"integration_time": [0.01, 0.03]})
+    n = xbsm.niirs(xbsm.sensor(**{**SENSOR, "integration_time": times}), SC)
+    assert n.sizes["integration_time"] == 2
+    assert "effective_integration_time" in n
+
+
+def test_beyond_the_horizon_is_flagged_not_silent():
+    far = xbsm.scenario(**{**SCENARIO, "altitude": 100.0, "ground_range": 150e3})
+    n = xbsm.niirs(S, far)
+    assert bool(np.isnan(n.niirs).all())
+    assert bool(has_flag(n.flags, "beyond_database").all())
+    o = xbsm.system_otf(S, far)
+    assert bool(has_flag(o.flags, "beyond_database"))
+
+
+def test_method_overrides_are_recorded_in_the_result():
+    n = xbsm.niirs(S, SC, xbsm.method("pybsm", frequency_samples=201))
+    assert n.attrs["method"] == "pybsm (frequency_samples=201)"
+    assert xbsm.snr(S, SC).attrs["method"] == "accurate"
+
+
+def test_decode_gives_one_boolean_per_flag():
+    n = xbsm.niirs(S, SC)
+    bits = xbsm.flags.decode(n.flags)
+    assert set(xbsm.flags.FLAGS) <= set(bits.data_vars)
+    assert bits.invalid.dims == n.flags.dims
+    np.testing.assert_array_equal(bits.well_fill_limited, has_flag(n.flags, "well_fill_limited"))
+
+
+# --- random invalid values: an error naming the parameter, never a silent number ----------
+
+_SENSOR_NAMES = [n for n in params.SENSOR_SPECS if n not in ("wavelength_min", "wavelength_max")]
+
+
+@settings(max_examples=150, deadline=None)
+@given(name=st.sampled_from(_SENSOR_NAMES),
+       value=st.one_of(st.just(math.inf), st.just(-math.inf), st.just(math.nan),
+                       st.floats(-1e12, -1e-300), st.text(max_size=3),
+                       st.complex_numbers(allow_nan=False, allow_infinity=False)
+                       .filter(lambda z: z.imag != 0)))
+def test_random_invalid_sensor_values_raise_naming_the_parameter(name, value):
+    spec = params.SENSOR_SPECS[name]
+    try:
+        xbsm.sensor(**{**SENSOR, name: value})
+    except ValueError as err:
+        assert name in str(err)
+        return
+    # accepted: only a real, finite value inside the allowed interval may pass
+    assert isinstance(value, float) and not spec.violated(np.asarray(value)).any()
