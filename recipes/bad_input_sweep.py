@@ -67,7 +67,7 @@ import xarray as xr  # noqa: E402
 
 import xbsm  # noqa: E402
 from xbsm.flags import FLAGS  # noqa: E402
-from xbsm.model import reflectance_to_photoelectrons  # noqa: E402
+from xbsm.simulate import reflectance_to_photoelectrons  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_OUT = Path("docs/benchmarks/bad_input_sweep.json")
@@ -797,7 +797,7 @@ add("system_otf.sweep_dim_fx", "system_otf", "pixel_pitch_x [8, 10] um on dim 'f
     names=("pixel_pitch_x", "fx"), main="system", expect="check",
     check=lambda r: ("silent_wrong", f"sweep merged with the fx axis: {dict(r.system.sizes)}"))
 
-# --- reflectance_to_photoelectrons (xbsm.model.reflectance_to_photoelectrons)
+# --- reflectance_to_photoelectrons (xbsm.simulate.reflectance_to_photoelectrons)
 R2P = "reflectance_to_photoelectrons"
 
 

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 import xbsm
 from xbsm import params
 from xbsm.flags import has_flag
-from xbsm.model import reflectance_to_photoelectrons
+from xbsm.simulate import reflectance_to_photoelectrons
 
 BAND = dict(wavelength_min=0.55e-6, wavelength_max=0.85e-6)
 SENSOR = dict(aperture_diameter=0.275, focal_length=4.0, pixel_pitch_x=8e-6, **BAND,

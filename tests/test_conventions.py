@@ -42,7 +42,6 @@ import xarray as xr
 import xbsm
 from xbsm import atmosphere, geometry, metrics, noise, quadrature, radiometry
 from xbsm.examples import olson_scenario, olson_sensor
-from xbsm.model import reflectance_to_photoelectrons
 from xbsm.otf import (
     aperture,
     defocus,
@@ -56,6 +55,7 @@ from xbsm.otf import (
     user,
     wavefront,
 )
+from xbsm.simulate import reflectance_to_photoelectrons
 
 RADIANCE = "W m-2 sr-1 m-1"
 IRRADIANCE = "W m-2 m-1"
@@ -83,7 +83,8 @@ EXPECTED_UNITS = MappingProxyType({
     # geometry
     "slant_range": "m", "elevation_angle": "rad", "target_elevation_angle": "rad",
     "nadir_angle": "rad", "altitude_along_path": "m", "ifov": "rad",
-    "ground_sample_distance": "m",
+    "ground_sample_distance": "m", "ifov_x": "rad", "ifov_y": "rad", "gsd_x": "m", "gsd_y": "m",
+    "otf_weights": "s-1 m-1",
     # atmosphere
     "transmission": "1", "path_thermal": RADIANCE, "surface_emission": RADIANCE,
     "solar_scatter": RADIANCE, "ground_reflected": RADIANCE,
@@ -248,6 +249,7 @@ def _cases():
         "noise_terms": lambda: noise.noise_terms(_signal(), s),
         # geometry
         "slant_range": lambda: geometry.slant_range(rng, 9000.0),
+        "viewing_geometry": lambda: geometry.viewing_geometry(rng, 9000.0, 8e-6, 8e-6, 4.0),
         "nadir_angle": lambda: _geometry(lambda g, h: geometry.nadir_angle(
             geometry.slant_range(g, h), h)),
         "elevation_angle": lambda: _geometry(lambda g, h: geometry.elevation_angle(
@@ -336,6 +338,10 @@ def _cases():
         "giqe_flags": lambda: metrics.giqe_flags(snr=xr.DataArray([1.0, 50.0], dims="n"),
                                                  rer=0.35, gsd=0.5),
         "sampling_q": lambda: metrics.sampling_q(0.7e-6, 0.275, xr.DataArray([2e-6], dims="p")),
+        "giqe_by_version": lambda: metrics.giqe_by_version(
+            rer=xr.DataArray([0.3, 0.5], dims="r"), eho=1.0, rer_x=0.35, rer_y=0.4, gsd_x=0.5,
+            gsd_y=0.5, snr=20.0, elevation=1.0, noise_gain=1.0, q=1.5,
+            noise_coefficient=0.344, calibration=metrics.giqe_calibrations()),
         # OTFs on a 3 x 5 frequency grid
         "circular_aperture": lambda: aperture.circular_aperture(fx, fy, wl, 0.275, 0.4),
         "defocus_wavefront_coefficient": lambda: aperture.defocus_wavefront_coefficient(
@@ -363,6 +369,7 @@ def _cases():
         "otf_to_psf": lambda: psf.otf_to_psf(_psf_input()),
         "spectral_average": lambda: spectral.spectral_average(
             aperture.circular_aperture(fx, fy, wl, 0.275), w),
+        "otf_weights": lambda: system.otf_weights(_signal()["spectral_weights"]),
         "system_components": lambda: system.system_components(
             s, sc, xr.DataArray(np.linspace(0.0, 4e5, 5), dims="frequency"),
             spectral_weights=_signal()["spectral_weights"],

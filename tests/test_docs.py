@@ -18,7 +18,8 @@ PAGES = ("index", "guide", "migration", "quirks", "flags", "api", "validation")
 
 # Modules whose public functions docs/api.md must list, one by one.
 API_MODULES = (
-    "xbsm.params", "xbsm.pybsm_compat", "xbsm.methods", "xbsm.model", "xbsm.atmosphere",
+    "xbsm.params", "xbsm.pybsm_compat", "xbsm.methods", "xbsm.model", "xbsm.simulate",
+    "xbsm.atmosphere",
     "xbsm.geometry", "xbsm.radiometry", "xbsm.noise", "xbsm.quadrature", "xbsm.metrics",
     "xbsm.metrics.edge", "xbsm.metrics.grd", "xbsm.metrics.giqe", "xbsm.metrics.pybsm_numerics",
     "xbsm.flags", "xbsm.examples", "xbsm.plot", "xbsm.cli",

@@ -157,7 +157,7 @@ def test_reflectance_to_photoelectrons_matches_pybsm(index):
     # pyBSM 0.16.1 radiance.reflectance_to_photoelectrons (100 reflectances, 300 K target),
     # recorded for the first 30 fixture cases by recipes/pybsm_reference.py
     sensor, scenario = datasets(CASES[index])
-    r = xbsm.model.reflectance_to_photoelectrons(sensor, scenario, method="pybsm")
+    r = xbsm.simulate.reflectance_to_photoelectrons(sensor, scenario, method="pybsm")
     np.testing.assert_allclose(r.photoelectrons.values, OUTPUTS["reflectance_pe"][index],
                                rtol=1e-9, atol=1e-9 * float(r.photoelectrons.max()))
     weights = OUTPUTS["reflectance_weights"][index]
@@ -168,9 +168,9 @@ def test_reflectance_to_photoelectrons_matches_pybsm(index):
 def test_reflectance_to_photoelectrons_is_linear_and_saturates_at_the_well():
     sc = xbsm.scenario(altitude=9000.0, ground_range=0.0, visibility=23.0)
     s = olson("nir")
-    r = xbsm.model.reflectance_to_photoelectrons(s, sc, reflectance=[0.0, 0.5, 1.0])
+    r = xbsm.simulate.reflectance_to_photoelectrons(s, sc, reflectance=[0.0, 0.5, 1.0])
     pe = r.photoelectrons.values
     assert pe[1] - pe[0] == pytest.approx(pe[2] - pe[1], rel=1e-12)  # paper Eq. 1 is linear
-    long_exposure = xbsm.model.reflectance_to_photoelectrons(s, sc, integration_time=10.0)
+    long_exposure = xbsm.simulate.reflectance_to_photoelectrons(s, sc, integration_time=10.0)
     assert float(long_exposure.photoelectrons.max()) == pytest.approx(96000.0)
     assert has_flag(long_exposure.flags, "well_fill_limited").item()

@@ -9,7 +9,18 @@ Public entry points::
     n = xbsm.niirs(s, sc)
 """
 
-from . import examples, flags, geometry, metrics, noise, otf, plot, pybsm_compat, radiometry
+from . import (
+               examples,
+               flags,
+               geometry,
+               metrics,
+               noise,
+               otf,
+               plot,
+               pybsm_compat,
+               radiometry,
+               simulate,
+)
 from .atmosphere import atmosphere_at, open_atmosphere
 from .methods import Method, method
 from .model import niirs, snr, system_otf
@@ -25,6 +36,7 @@ __all__ = [
     "otf",
     "plot",
     "radiometry",
+    "simulate",
     "atmosphere_at",
     "method",
     "open_atmosphere",

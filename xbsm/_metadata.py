@@ -50,3 +50,17 @@ def long_name_of(func) -> str:
 def described(out, func, units: str = "1", **extra):
     """:func:`named` with the first docstring line of ``func`` as the ``long_name``."""
     return named(out, units, long_name_of(func), **extra)
+
+
+def result(variables: dict, method, **attrs) -> xr.Dataset:
+    """A result Dataset without scalar coordinates, saying which method made it.
+
+    The ``method`` attribute names the preset and every knob that differs from it.
+
+    An output that repeats an input swept on a dimension of its own name (``read_noise``
+    swept on ``read_noise``) is left to that coordinate, which holds the same values.
+    """
+    dims = {d for v in variables.values() for d in v.dims}
+    attrs = {"method": method.describe(), **attrs}
+    ds = xr.Dataset({k: v for k, v in variables.items() if k not in dims}, attrs=attrs)
+    return ds.drop_vars([c for c in ds.coords if ds[c].ndim == 0 and c not in ds.dims])

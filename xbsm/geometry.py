@@ -7,6 +7,7 @@ scenario dimensions. Heights are above the spherical Earth's surface. [m]
 from __future__ import annotations
 
 import numpy as np
+import xarray as xr
 
 from ._metadata import named
 from .constants import EARTH_RADIUS
@@ -253,3 +254,38 @@ def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *,
     sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
     out = np.arctan2((a - c) - a * two_half_sq, a * sine)
     return named(out, "rad", "elevation angle at the target")
+
+
+def viewing_geometry(ground_range, altitude, pixel_pitch_x, pixel_pitch_y, focal_length, *,
+                     elevation="target", form="stable") -> xr.Dataset:
+    """Slant range, GIQE elevation angle, IFOVs and GSDs of every scenario.
+
+    Parameters
+    ----------
+    ground_range, altitude : float or xr.DataArray
+        Scenario geometry (target on the ground). [m]
+    pixel_pitch_x, pixel_pitch_y, focal_length : float or xr.DataArray
+        [m]
+    elevation : {"target", "look-down"}
+        The GIQE elevation angle: :func:`target_elevation_angle` or
+        :func:`elevation_angle` (pyBSM's look-down angle at the sensor).
+    form : {"stable", "law-of-cosines"}
+        See :data:`FORMS`.
+
+    Returns
+    -------
+    xr.Dataset
+        ``slant_range`` [m], ``elevation_angle`` [rad], ``ifov_x``, ``ifov_y`` [rad],
+        ``gsd_x``, ``gsd_y`` [m].
+    """
+    slant = slant_range(ground_range, altitude, form=form)
+    angle = elevation_angle if elevation == "look-down" else target_elevation_angle
+    out = {"slant_range": named(xr.DataArray(slant), "m", "slant range"),
+           "elevation_angle": named(xr.DataArray(angle(slant, altitude, form=form)), "rad",
+                                    "GIQE elevation angle")}
+    for axis, pitch in (("x", pixel_pitch_x), ("y", pixel_pitch_y)):
+        pixel_angle = xr.DataArray(ifov(pitch, focal_length))
+        out[f"ifov_{axis}"] = named(pixel_angle, "rad", f"instantaneous field of view along {axis}")
+        out[f"gsd_{axis}"] = named(ground_sample_distance(pixel_angle, slant), "m",
+                                   f"ground sample distance along {axis}")
+    return xr.Dataset(out)

@@ -11,26 +11,13 @@ import xarray as xr
 
 from . import flags as fl
 from . import geometry, metrics, noise, params, radiometry
+from ._metadata import result
 from .atmosphere import band_atmosphere
 from .methods import Method
 from .methods import method as resolve_method
-from .otf.system import system_components
+from .otf.system import otf_weights, system_components
 from .params import check_inputs
 from .quadrature import edge_nodes, optics_cutoff, undersampled
-
-
-def _result(variables: dict, m: Method, **attrs) -> xr.Dataset:
-    """A result Dataset without scalar coordinates, saying which method made it.
-
-    The ``method`` attribute names the preset and every knob that differs from it.
-
-    An output that repeats an input swept on a dimension of its own name (``read_noise``
-    swept on ``read_noise``) is left to that coordinate, which holds the same values.
-    """
-    dims = {d for v in variables.values() for d in v.dims}
-    attrs = {"method": m.describe(), **attrs}
-    ds = xr.Dataset({k: v for k, v in variables.items() if k not in dims}, attrs=attrs)
-    return ds.drop_vars([c for c in ds.coords if ds[c].ndim == 0 and c not in ds.dims])
 
 
 def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets="giqe"):
@@ -77,7 +64,7 @@ def _snr(sensor: xr.Dataset, scenario: xr.Dataset, m: Method, targets: str) -> x
     noise_ = noise.noise_terms(signal, sensor)
     brighter = np.maximum(signal["target_photoelectrons"], signal["background_photoelectrons"])
     flags = fl.set_flag(atm["flags"], "well_fill_limited", signal["well_fill_scale"] < 1.0)
-    return _result({
+    return result({
         "snr": noise_["snr"],
         "snr_frame": noise_["snr_frame"],
         **{name: signal[name] for name in (
@@ -99,96 +86,11 @@ def _band_atmosphere(sensor: xr.Dataset, scenario: xr.Dataset, m: Method) -> xr.
         interpolation=m.atmosphere_interpolation, band_edges=m.band_edges)
 
 
-def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, reflectance=None,
-                                  method="accurate", *, temperature=300.0,
-                                  integration_time=None) -> xr.Dataset:
-    """Photoelectrons per pixel from Lambertian targets of given reflectance.
-
-    The radiometric mapping an image simulation applies to a reflectance map
-    (pyBSM's ``reflectance_to_photoelectrons``).
-
-    Parameters
-    ----------
-    sensor, scenario : xr.Dataset
-        From :func:`xbsm.sensor` and :func:`xbsm.scenario`.
-    reflectance : xr.DataArray or array_like, optional
-        Target reflectances; default 100 values from 0 to 1 (dim ``reflectance``). [1]
-    method : str or Method
-        Knobs ``constants``, ``atmosphere_interpolation``, ``band_edges``.
-    temperature : float or xr.DataArray
-        Target temperature (pyBSM fixes 300 K). [K]
-    integration_time : float or xr.DataArray, optional
-        Default the sensor's maximum integration time. [s]
-
-    Returns
-    -------
-    xr.Dataset
-        ``photoelectrons`` over ``reflectance`` (and the sweep dims), scaled so
-        that the brightest reflectance fills the well at most (pyBSM's rule);
-        ``effective_integration_time`` after that scaling; ``spectral_weights``, the
-        spectral photoelectron rate of the brightest target normalised to a
-        peak of 1; ``flags`` (``well_fill_limited`` where scaled).
-
-    Notes
-    -----
-    Paper Eq. 1 and 2 with the dark current; the count is linear in
-    reflectance (Eq. 1 is).
-    """
-    check_inputs(sensor, scenario)
-    m = resolve_method(method)
-    s, k = sensor, m.constants
-    if reflectance is None:
-        reflectance = np.linspace(0.0, 1.0, 100)
-    if not isinstance(reflectance, xr.DataArray):
-        values = np.atleast_1d(np.asarray(reflectance))
-        reflectance = xr.DataArray(values, dims="reflectance", coords={"reflectance": values})
-    reflectance = params.argument("reflectance", reflectance, allowed_dims=("reflectance",))
-    temperature = params.argument("temperature", temperature)
-    integration_time = (s["integration_time"] if integration_time is None
-                        else params.argument("integration_time", integration_time))
-    atm = _band_atmosphere(s, scenario, m)
-    band = radiometry.sensor_band_terms(s, atm["wavelength"], k)
-    radiance = radiometry.total_radiance(atm, reflectance, temperature, k)
-    spectral = radiometry.photon_detection_rate(
-        radiometry.detector_irradiance(radiance, band, s), band["quantum_efficiency"],
-        s["detector_width_x"], s["detector_width_y"], k)
-    rate = radiometry.band_integral(spectral) + s["dark_current"]
-    counts = rate * integration_time * s["tdi_stages"]
-    saturation = counts.max("reflectance") / s["max_well"]
-    scale = xr.where(saturation > 1.0, 1.0 / saturation, 1.0)
-    counts = np.minimum(counts * scale, s["max_well"])
-    brightest = spectral.isel(reflectance=-1, drop=True)
-    flags = fl.set_flag(atm["flags"], "well_fill_limited", scale < 1.0)
-    return _result({
-        "photoelectrons": counts.assign_attrs(units="count", long_name="photoelectrons per pixel"),
-        "effective_integration_time": (integration_time * scale).assign_attrs(
-            units="s", long_name="integration time after the well limit"),
-        "spectral_weights": (brightest / brightest.max("wavelength")).assign_attrs(
-            units="1", long_name="normalised spectral photoelectron rate"),
-        "flags": flags,
-    }, m)
-
-
-GIQE_VERSIONS = (3, 4, 5)
-
-
 def _optics_cutoff(sensor: xr.Dataset, wavelength: xr.DataArray) -> xr.DataArray:
     """The optics cutoff over the band, from the sensor's QE and transmission curves."""
     curves = [radiometry.resample_spectral(sensor[name], wavelength, name)
               for name in ("quantum_efficiency", "optics_transmission")]
     return optics_cutoff(sensor["aperture_diameter"], wavelength, *curves)
-
-
-def _otf_weights(spectral_weights: xr.DataArray) -> xr.DataArray:
-    """Spectral weights for the polychromatic OTFs (paper Eq. 3).
-
-    Non-positive weights count as zero. Cells with no usable weight at all are
-    beyond the database (their SNR is NaN and flagged ``beyond_database``);
-    they get uniform weights so the OTF stays finite while the NIIRS is NaN.
-    """
-    weights = spectral_weights.where(spectral_weights > 0, 0.0)
-    usable = weights.sum("wavelength") > 0
-    return xr.where(usable, weights, 1.0)
 
 
 def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibration=None):
@@ -233,11 +135,23 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
     m = resolve_method(method)
     calibration = metrics.giqe_calibrations(calibration)
     r = _snr(sensor, scenario, m, "giqe")
-    view = _viewing_geometry(sensor, scenario, m)
+    view = geometry.viewing_geometry(
+        scenario["ground_range"], scenario["altitude"], sensor["pixel_pitch_x"],
+        sensor["pixel_pitch_y"], sensor["focal_length"], elevation=m.elevation, form=m.geometry)
     edges = _edge_terms(sensor, scenario, r, view, m)
-    giqe = _giqe_terms(sensor, r, view, edges, m, calibration)
+    ifov = xr.concat([view["ifov_x"], view["ifov_y"]], dim="orientation").assign_coords(
+        orientation=["x", "y"])
+    giqe = metrics.giqe_by_version(
+        rer=edges["rer"], eho=edges["eho"], rer_x=edges["rer_unfiltered_x"],
+        rer_y=edges["rer_unfiltered_y"], gsd_x=view["gsd_x"], gsd_y=view["gsd_y"],
+        snr=r["snr"], elevation=view["elevation_angle"],
+        noise_gain=noise.noise_gain(sensor["filter_kernel"]),
+        # GIQE 5's Q = lambda N / p at the band centre, per orientation (flags only)
+        q=metrics.sampling_q(0.5 * (sensor["wavelength_min"] + sensor["wavelength_max"]),
+                             sensor["aperture_diameter"], ifov),
+        noise_coefficient=m.giqe4_noise_coefficient, calibration=calibration)
     flags = giqe["flags"] | r["flags"] | edges["undersampled"]
-    return _result({
+    return result({
         "niirs": giqe["niirs"],
         **{name: r[name] for name in r.data_vars if name not in ("spectral_weights", "flags")},
         **{name: edges[name] for name in edges.data_vars
@@ -248,24 +162,6 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
     }, m)
 
 
-def _viewing_geometry(s: xr.Dataset, sc: xr.Dataset, m: Method) -> xr.Dataset:
-    """Slant range, GIQE elevation angle, IFOVs and GSDs of every scenario."""
-    slant = geometry.slant_range(sc["ground_range"], sc["altitude"], form=m.geometry)
-    if m.elevation == "look-down":
-        elevation = geometry.elevation_angle(slant, sc["altitude"], form=m.geometry)
-    else:
-        elevation = geometry.target_elevation_angle(slant, sc["altitude"], form=m.geometry)
-    ifov_x = geometry.ifov(s["pixel_pitch_x"], s["focal_length"])
-    ifov_y = geometry.ifov(s["pixel_pitch_y"], s["focal_length"])
-    return xr.Dataset({
-        "slant_range": slant.assign_attrs(units="m", long_name="slant range"),
-        "elevation_angle": elevation.assign_attrs(units="rad", long_name="GIQE elevation angle"),
-        "ifov_x": ifov_x, "ifov_y": ifov_y,
-        "gsd_x": geometry.ground_sample_distance(ifov_x, slant),
-        "gsd_y": geometry.ground_sample_distance(ifov_y, slant),
-    })
-
-
 def _edge_terms(s: xr.Dataset, sc: xr.Dataset, r: xr.Dataset, view: xr.Dataset,
                 m: Method) -> xr.Dataset:
     """RER and EHO of the system OTF on the x and y slices, at the method's quadrature nodes."""
@@ -273,7 +169,7 @@ def _edge_terms(s: xr.Dataset, sc: xr.Dataset, r: xr.Dataset, view: xr.Dataset,
     cutoff = _optics_cutoff(s, weights["wavelength"])
     ifov_x, ifov_y = view["ifov_x"], view["ifov_y"]
     nodes, quad_weights = edge_nodes(cutoff, ifov_x, ifov_y, **m.edge_quadrature_knobs())
-    otf = system_components(s, sc, nodes, spectral_weights=_otf_weights(weights),
+    otf = system_components(s, sc, nodes, spectral_weights=otf_weights(weights),
                             integration_time=r["effective_integration_time"],
                             slant_range=view["slant_range"], method=m)
     ifov = xr.concat([ifov_x, ifov_y], dim="orientation").assign_coords(orientation=["x", "y"])
@@ -303,47 +199,6 @@ def _edge_terms(s: xr.Dataset, sc: xr.Dataset, r: xr.Dataset, view: xr.Dataset,
         "coherence_diameter": otf["coherence_diameter"],
         "cutoff_frequency": cutoff,
         "undersampled": fl.set_flag(xr.DataArray(np.int32(0)), "undersampled_grid", coarse),
-    })
-
-
-def _giqe_terms(s: xr.Dataset, r: xr.Dataset, view: xr.Dataset, edges: xr.Dataset, m: Method,
-                calibration) -> xr.Dataset:
-    """NIIRS by GIQE 3, 4 and 5 (dim ``giqe``), their flags and their GSD terms."""
-    gsd = np.sqrt(view["gsd_x"] * view["gsd_y"]).assign_attrs(
-        units="m", long_name="ground sample distance (geometric mean)")
-    gain = noise.noise_gain(s["filter_kernel"])
-    elevation = view["elevation_angle"]
-    ifov = xr.concat([view["ifov_x"], view["ifov_y"]], dim="orientation").assign_coords(
-        orientation=["x", "y"])
-    # GIQE 5's Q = lambda N / p at the band centre, per orientation (flags only)
-    q = metrics.sampling_q(0.5 * (s["wavelength_min"] + s["wavelength_max"]),
-                           s["aperture_diameter"], ifov)
-    common = dict(rer=edges["rer"], gsd=gsd, eho=edges["eho"], snr=r["snr"], noise_gain=gain,
-                  elevation=elevation)
-    g3 = metrics.giqe3(**common, calibration=calibration[3])
-    g4 = metrics.giqe4(**common, noise_coefficient=m.giqe4_noise_coefficient,
-                       calibration=calibration[4])
-    g5 = metrics.giqe5(rer_x=edges["rer_unfiltered_x"], rer_y=edges["rer_unfiltered_y"],
-                       gsd=view["gsd_x"], snr=r["snr"], elevation=elevation,
-                       calibration=calibration[5], q=q)
-    versions = xr.DataArray(list(GIQE_VERSIONS), dims="giqe", name="giqe",
-                            attrs={"long_name": "GIQE version"})
-
-    def by_version(name):
-        return xr.concat([g[name] for g in (g3, g4, g5)], dim=versions, coords="minimal",
-                         compat="override")
-
-    return xr.Dataset({
-        "niirs": by_version("niirs").assign_attrs(
-            units="1", long_name="National Imagery Interpretability Rating Scale",
-            references="; ".join(f"GIQE {v}: {metrics.GIQE_REFERENCES[v]}"
-                                 for v in GIQE_VERSIONS)),
-        "flags": by_version("flags"),
-        "rer_giqe5": g5["rer"].assign_attrs(units="1", long_name="GIQE 5 relative edge response"),
-        "gsd": gsd,
-        "gsd_gp": g4["gsd_gp"],
-        "gsd_w": g5["gsd_w"].assign_attrs(units="m", long_name="GIQE 5 elevation-weighted GSD"),
-        "noise_gain": gain,
     })
 
 
@@ -383,26 +238,13 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method=
     if not isinstance(frequency, xr.DataArray):
         frequency = np.atleast_1d(np.asarray(frequency))
         frequency = xr.DataArray(frequency, dims="frequency", coords={"frequency": frequency})
-    frequency = _frequency_argument("frequency", frequency)
+    frequency = params.frequencies("frequency", frequency)
     if "frequency" in frequency.coords:
         frequency["frequency"].attrs.update(units="cycles/rad", long_name="spatial frequency")
     if fy is not None:
-        fy = _frequency_argument("fy", fy)
+        fy = params.frequencies("fy", fy)
     slant = geometry.slant_range(scenario["ground_range"], scenario["altitude"], form=m.geometry)
-    out = system_components(sensor, scenario, frequency, spectral_weights=_otf_weights(weights),
+    out = system_components(sensor, scenario, frequency, spectral_weights=otf_weights(weights),
                             integration_time=r["effective_integration_time"], slant_range=slant,
                             method=m, fy=fy)
-    return _result({**out.data_vars, "flags": r["flags"]}, m)
-
-
-MAX_FREQUENCIES = 1_000_000
-"""Most frequencies :func:`system_otf` evaluates per call (each costs a wavelength axis)."""
-
-
-def _frequency_argument(name, values: xr.DataArray) -> xr.DataArray:
-    """Finite frequencies on any dims but xbsm's own 2-D ones, and not absurdly many."""
-    if values.size > MAX_FREQUENCIES:
-        raise ValueError(f"{name} has {values.size} values; at most {MAX_FREQUENCIES} per call "
-                         "(xbsm.model.MAX_FREQUENCIES): evaluate the grid in pieces")
-    out = params.argument("frequency", values, allowed_dims=tuple(values.dims))
-    return out.rename(name) if name != "frequency" else out
+    return result({**out.data_vars, "flags": r["flags"]}, m)

@@ -547,6 +547,19 @@ def argument(name: str, value, allowed_dims=()) -> xr.DataArray:
     return _validated(name, value, ARGUMENT_SPECS[name], allowed_dims)
 
 
+MAX_FREQUENCIES = 1_000_000
+"""Most frequencies one model call evaluates (each costs a wavelength axis of OTFs)."""
+
+
+def frequencies(name: str, values: xr.DataArray) -> xr.DataArray:
+    """Validate a frequency grid: finite, on the caller's own dims, not absurdly large."""
+    if values.size > MAX_FREQUENCIES:
+        raise ValueError(f"{name} has {values.size} values; at most {MAX_FREQUENCIES} per call "
+                         "(xbsm.params.MAX_FREQUENCIES): evaluate the grid in pieces")
+    out = argument("frequency", values, allowed_dims=tuple(values.dims))
+    return out.rename(name) if name != "frequency" else out
+
+
 def check_kind(ds: xr.Dataset, kind: str, argument: str) -> None:
     """Raise a clear error when a dataset of the wrong kind is passed."""
     if not isinstance(ds, xr.Dataset) or ds.attrs.get("xbsm_kind") != kind:

@@ -23,6 +23,8 @@ from xbsm import flags as _flags
 from .._metadata import named
 
 __all__ = [
+    "GIQE_VERSIONS",
+    "giqe_by_version",
     "GIQE3_CALIBRATION",
     "GIQE4_CALIBRATION",
     "GIQE5_CALIBRATION",
@@ -574,3 +576,68 @@ def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q
         gsd_ground_plane=gsd_gp, q=q,
     )
     return xr.Dataset({"niirs": niirs, "gsd_w": gsd_w, "rer": rer, "flags": fl})
+
+
+#: The GIQE versions :func:`giqe_by_version` evaluates, in order along ``giqe``.
+GIQE_VERSIONS = (3, 4, 5)
+
+
+def giqe_by_version(*, rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain, q,
+                    noise_coefficient, calibration) -> xr.Dataset:
+    """NIIRS by GIQE 3, 4 and 5 along a ``giqe`` dimension, with flags and GSD terms.
+
+    Parameters
+    ----------
+    rer, eho : xr.DataArray
+        Geometric-mean RER and EHO of the system with its filter (GIQE 3 and 4). [1]
+    rer_x, rer_y : xr.DataArray
+        RER along x and y of the system without its filter (GIQE 5). [1]
+    gsd_x, gsd_y : xr.DataArray
+        Image-plane GSD along x and y. [m]
+    snr : xr.DataArray
+        Contrast SNR. [1]
+    elevation : xr.DataArray
+        GIQE elevation angle. [rad]
+    noise_gain : float or xr.DataArray
+        Noise gain of the post-processing filter. [1]
+    q : xr.DataArray
+        GIQE 5's sampling ratio lambda N / p (flags only). [1]
+    noise_coefficient : float
+        GIQE 4's noise coefficient (0.344; pyBSM uses 0.334). [1]
+    calibration : mapping of int to GiqeCalibration
+        From :func:`giqe_calibrations`.
+
+    Returns
+    -------
+    xr.Dataset
+        ``niirs`` and ``flags`` over ``giqe``; ``rer_giqe5`` [1]; ``gsd`` (geometric
+        mean), ``gsd_gp`` (GIQE 4 ground plane), ``gsd_w`` (GIQE 5) [m];
+        ``noise_gain`` [1].
+    """
+    gsd = named(xr.DataArray(np.sqrt(gsd_x * gsd_y)), "m",
+                "ground sample distance (geometric mean)")
+    common = dict(rer=rer, gsd=gsd, eho=eho, snr=snr, noise_gain=noise_gain,
+                  elevation=elevation)
+    g3 = giqe3(**common, calibration=calibration[3])
+    g4 = giqe4(**common, noise_coefficient=noise_coefficient, calibration=calibration[4])
+    g5 = giqe5(rer_x=rer_x, rer_y=rer_y, gsd=gsd_x, snr=snr, elevation=elevation,
+               calibration=calibration[5], q=q)
+    versions = xr.DataArray(list(GIQE_VERSIONS), dims="giqe", name="giqe",
+                            attrs={"long_name": "GIQE version"})
+
+    def by_version(name):
+        return xr.concat([g[name] for g in (g3, g4, g5)], dim=versions, coords="minimal",
+                         compat="override")
+
+    references = "; ".join(f"GIQE {v}: {GIQE_REFERENCES[v]}" for v in GIQE_VERSIONS)
+    return xr.Dataset({
+        "niirs": named(by_version("niirs"), "1", "National Imagery Interpretability Rating Scale",
+                       references=references),
+        "flags": by_version("flags"),
+        "rer_giqe5": named(g5["rer"], "1", "GIQE 5 relative edge response",
+                           references=g5["rer"].attrs.get("references", "")),
+        "gsd": gsd,
+        "gsd_gp": g4["gsd_gp"],
+        "gsd_w": g5["gsd_w"],
+        "noise_gain": named(xr.DataArray(noise_gain), "1", "noise gain of the filter"),
+    })

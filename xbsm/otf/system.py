@@ -29,6 +29,28 @@ _UNIT_Y = xr.DataArray([0.0, 1.0], dims="orientation", coords={"orientation": OR
 COMPONENTS = ("aperture", "turbulence", "detector", "jitter", "drift", "wavefront", "filter")
 
 
+def otf_weights(spectral_weights: xr.DataArray) -> xr.DataArray:
+    """Spectral weights for the polychromatic OTFs (paper Eq. 3).
+
+    Parameters
+    ----------
+    spectral_weights : xr.DataArray
+        The target's spectral photoelectron rate over ``wavelength`` (from :func:`xbsm.snr`).
+        [s-1 m-1]
+
+    Returns
+    -------
+    xr.DataArray
+        Non-negative weights over ``wavelength``. Non-positive rates count as zero;
+        cells with no usable weight at all (beyond the database: their SNR is NaN and
+        flagged ``beyond_database``) get uniform weights, so that the OTF stays finite
+        while the NIIRS is NaN. [s-1 m-1]
+    """
+    weights = spectral_weights.where(spectral_weights > 0, 0.0)
+    usable = weights.sum("wavelength") > 0
+    return xr.where(usable, weights, 1.0)
+
+
 def spectral_bins(wavelength: xr.DataArray, weights: xr.DataArray, count: int):
     """Group the band into at most ``count`` contiguous bins for the polychromatic OTFs.
 
