@@ -159,6 +159,39 @@ OTHER_ROWS = [
      "reflectance must lie in [0, 1]"),
     ("temperature_zero", lambda: reflectance_to_photoelectrons(S, SC, temperature=0.0),
      ValueError, "temperature must lie in (0, inf) K"),
+    ("sensor_dims_disagree", lambda: xbsm.sensor(**{
+        **SENSOR, "focal_length": xr.DataArray([3.0, 4.0], dims="position"),
+        "jitter_x": xr.DataArray([1e-6, 2e-6, 3e-6], dims="position")}),
+     ValueError, "both sweep dimension 'position'"),
+    ("kernel_string", lambda: xbsm.sensor(**SENSOR, filter_kernel="sharpen"), ValueError,
+     "filter_kernel must be a 2-D array"),
+    ("edited_band", lambda: xbsm.niirs(S.assign(wavelength_min=9e-6), SC), ValueError,
+     "wavelength_min < wavelength_max"),
+    ("otf_frequency_on_reserved_dim", lambda: xbsm.system_otf(
+        S, SC, xr.DataArray([0.0, 1e5], dims="wavelength")), ValueError,
+     "swept on dimension 'wavelength'"),
+    ("otf_frequency_2d_array", lambda: xbsm.system_otf(S, SC, np.zeros((2, 2))), ValueError,
+     "frequency must be 1-D"),
+    ("otf_fy_not_labelled", lambda: xbsm.system_otf(
+        S, SC, xr.DataArray([0.0, 1e5], dims="fx"), fy=[0.0, 1.0]), ValueError,
+     "fy must be an xr.DataArray"),
+    ("reflectance_without_its_dim", lambda: reflectance_to_photoelectrons(
+        S, SC, xr.DataArray([0.1, 0.2], dims="case")), ValueError,
+     "must have a 'reflectance' dimension"),
+    ("atmosphere_complex", lambda: xbsm.atmosphere_at(9000.0, 1 + 2j, 23.0), ValueError,
+     "ground_range must be a real number"),
+    ("atmosphere_unknown_units", lambda: xbsm.atmosphere_at(
+        9000.0, xr.DataArray(20.0, attrs={"units": "furlong"}), 23.0), ValueError,
+     "ground_range has units 'furlong'"),
+    ("pybsm_w_x_zero", lambda: xbsm.pybsm_compat.sensor(
+        D=0.275, f=4.0, p_x=8e-6, w_x=0.0, opt_trans_wavelengths=np.array([0.55e-6, 0.85e-6])),
+     ValueError, "w_x (detector_width_x) must lie in (0, inf)"),
+    ("grd_negative_slant_range", lambda: xbsm.metrics.ground_resolved_distance(
+        xr.DataArray([1.0, 0.5], dims="frequency", coords={"frequency": [0.0, 1e5]}),
+        50.0, 1e-5, -1.0), ValueError, "slant_range must lie in (0, inf)"),
+    ("grd_decreasing_frequency", lambda: xbsm.metrics.ground_resolved_distance(
+        xr.DataArray([0.5, 1.0], dims="frequency", coords={"frequency": [1e5, 0.0]}),
+        50.0, 1e-5, 1e4), ValueError, "must increase strictly"),
     ("integration_time_negative", lambda: reflectance_to_photoelectrons(
         S, SC, integration_time=-1.0), ValueError, "integration_time must lie in (0, inf) s"),
 ]
@@ -173,6 +206,22 @@ def test_bad_call_raises_a_clear_error(call, error, fragment):
 
 
 # --- inputs that are legitimate but odd: converted, promoted or flagged, never silent ------
+
+
+def test_atmosphere_at_reads_the_units_attribute():
+    km = xbsm.atmosphere_at(9000.0, xr.DataArray(20.0, attrs={"units": "km"}), 23.0)
+    xr.testing.assert_identical(km.transmission, xbsm.atmosphere_at(9000.0, 20e3,
+                                                                     23.0).transmission)
+
+
+def test_cli_refuses_an_output_that_is_a_file(tmp_path, capsys):
+    from xbsm.cli import main
+    target = tmp_path / "file.txt"
+    target.write_text("x")
+    with pytest.raises(SystemExit) as exit_:
+        main(["olson", "--out", str(target)])
+    assert exit_.value.code == 2
+    assert "exists and is not a directory" in capsys.readouterr().err
 
 
 def test_units_attribute_is_converted():

@@ -39,6 +39,7 @@ import xarray as xr
 
 from ._metadata import named
 from .flags import flag, flag_attrs
+from .units import si_factor
 
 __all__ = [
     "COMPONENTS",
@@ -335,16 +336,27 @@ def _spectra_kernel(altitude, ground_range, visibility, *, path, interpolation, 
     return out.reshape(shape + (n_comp, n_wl))
 
 
+_INPUT_UNITS = MappingProxyType({"altitude": "m", "ground_range": "m", "visibility": "km"})
+
+
 def _as_input(value, name):
-    """Convert a float or DataArray input to a float64 DataArray."""
-    if isinstance(value, xr.DataArray):
-        for dim in ("wavelength", "component"):
-            if dim in value.dims:
-                raise ValueError(f"{name} must not have the dimension {dim!r}")
-        if not np.issubdtype(value.dtype, np.number):
-            raise ValueError(f"{name} must be numeric; got dtype {value.dtype}")
-        return value.astype(np.float64)
-    return xr.DataArray(np.float64(value))
+    """Convert a float or DataArray input to a float64 DataArray in the database's units."""
+    if not isinstance(value, xr.DataArray):
+        value = xr.DataArray(np.asarray(value))
+    for dim in ("wavelength", "component"):
+        if dim in value.dims:
+            raise ValueError(f"{name} must not have the dimension {dim!r}")
+    if value.dtype.kind not in "iuf":
+        raise ValueError(f"{name} must be a real number or an xr.DataArray of real numbers; "
+                         f"got dtype {value.dtype}")
+    out = value.astype(np.float64)
+    given, expected = value.attrs.get("units"), _INPUT_UNITS[name]
+    if given is not None and str(given).strip() not in ("", expected):
+        factor = si_factor(str(given).strip(), expected)
+        if factor is None:
+            raise ValueError(f"{name} has units {given!r}; expected {expected!r} or a multiple")
+        out = out * factor
+    return out
 
 
 def _wavelength_window(wavelength, bounds):

@@ -136,7 +136,12 @@ def main(argv=None) -> int:
     olson.add_argument("--method", choices=sorted(PRESETS), default="accurate")
     args = parser.parse_args(argv)
     if args.command == "olson":
-        run_olson(args.out, args.method)
+        if args.out.exists() and not args.out.is_dir():
+            parser.error(f"--out {args.out} exists and is not a directory")
+        try:
+            run_olson(args.out, args.method)
+        except OSError as err:
+            parser.error(f"cannot write to --out {args.out}: {err.strerror or err}")
     return 0
 
 

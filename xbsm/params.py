@@ -304,7 +304,26 @@ def _suggesting(func):
     return wrapper
 
 
+def _check_shared_dims(values: dict[str, xr.DataArray], kind: str) -> None:
+    """Parameters swept on one dimension must agree on its length and coordinates."""
+    seen = {}
+    for name, value in values.items():
+        for dim in value.dims:
+            index = value.indexes.get(dim)
+            if dim not in seen:
+                seen[dim] = (name, value.sizes[dim], index)
+                continue
+            first, size, first_index = seen[dim]
+            if size != value.sizes[dim] or (index is not None and first_index is not None
+                                            and not index.equals(first_index)):
+                raise ValueError(
+                    f"{kind} parameters {first} and {name} both sweep dimension {dim!r} but "
+                    f"with different lengths or coordinates ({size} and {value.sizes[dim]} "
+                    "values); one dimension is one sweep: give them the same values")
+
+
 def _finish(values: dict[str, xr.DataArray], kind: str) -> xr.Dataset:
+    _check_shared_dims(values, kind)
     ds = xr.Dataset(values)
     ds.attrs["xbsm_kind"] = kind
     return ds
@@ -460,9 +479,15 @@ def _kernel(kernel) -> xr.DataArray:
     if isinstance(kernel, xr.DataArray):
         if set(kernel.dims) != {"kernel_y", "kernel_x"}:
             raise ValueError("filter_kernel must have dims ('kernel_y', 'kernel_x')")
+        if kernel.dtype.kind not in "iuf":
+            raise ValueError(f"filter_kernel must hold real numbers; got dtype {kernel.dtype}")
         out = kernel.transpose("kernel_y", "kernel_x").astype(float)
     else:
-        array = np.asarray(kernel, dtype=float)
+        try:
+            array = np.asarray(kernel, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError("filter_kernel must be a 2-D array of real numbers that sums to 1 "
+                             f"(e.g. [[-0.25, 1.5, -0.25]]); got {kernel!r:.60}") from None
         if array.ndim == 1:
             array = array[np.newaxis, :]
         if array.ndim != 2 or array.size == 0:
@@ -553,10 +578,14 @@ MAX_FREQUENCIES = 1_000_000
 
 def frequencies(name: str, values: xr.DataArray) -> xr.DataArray:
     """Validate a frequency grid: finite, on the caller's own dims, not absurdly large."""
+    if not isinstance(values, xr.DataArray):
+        raise ValueError(f"{name} must be an xr.DataArray with named dimensions "
+                         f"(e.g. dims ('fy',)) [cycles/rad]; got {type(values).__name__}")
     if values.size > MAX_FREQUENCIES:
         raise ValueError(f"{name} has {values.size} values; at most {MAX_FREQUENCIES} per call "
                          "(xbsm.params.MAX_FREQUENCIES): evaluate the grid in pieces")
-    out = argument("frequency", values, allowed_dims=tuple(values.dims))
+    own = ("frequency", "fx", "fy", "x", "y")
+    out = argument("frequency", values, allowed_dims=tuple(d for d in values.dims if d in own))
     return out.rename(name) if name != "frequency" else out
 
 
@@ -596,6 +625,14 @@ def check_inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> None:
                 mask = spec.violated(value.values)
                 if np.any(mask):
                     _raise(name, spec, value.values[mask].ravel()[0])
+    low, high = (sensor[name] for name in ("wavelength_min", "wavelength_max"))
+    if low.ndim or high.ndim or not float(low) < float(high):
+        raise ValueError("wavelength_min and wavelength_max must be scalars with "
+                         f"wavelength_min < wavelength_max; got {low.values} and {high.values}")
+    if "filter_kernel" not in sensor or set(sensor["filter_kernel"].dims) != {"kernel_y",
+                                                                               "kernel_x"}:
+        raise ValueError("the sensor's filter_kernel must be a 2-D array on "
+                         "('kernel_y', 'kernel_x'); make it with xbsm.sensor(filter_kernel=...)")
     for dim in set(sensor.dims) & set(scenario.dims):
         if sensor.sizes[dim] != scenario.sizes[dim]:
             raise ValueError(

@@ -147,6 +147,8 @@ def sensor(**kw) -> xr.Dataset:
     other_irradiance = kw.pop("other_irradiance", None)
     if other_irradiance is not None:
         out["stray_irradiance"] = other_irradiance
+    if kw.get("w_x") is not None and not np.all(np.asarray(kw["w_x"], dtype=float) > 0):
+        raise ValueError(f"w_x (detector_width_x) must lie in (0, inf) m; got {kw['w_x']!r}")
     if kw.get("w_y") is None and kw.get("w_x") is not None:
         p_y = kw.get("p_y") if kw.get("p_y") is not None else kw["p_x"]
         kw["w_y"] = kw["p_x"] / kw["w_x"] * p_y  # pyBSM 0.16.1's default

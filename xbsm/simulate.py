@@ -61,8 +61,15 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
     if reflectance is None:
         reflectance = np.linspace(0.0, 1.0, 100)
     if not isinstance(reflectance, xr.DataArray):
-        values = np.atleast_1d(np.asarray(reflectance))
+        values = np.asarray(reflectance)
+        if values.ndim > 1:
+            raise ValueError("reflectance must be 1-D, or an xr.DataArray with a 'reflectance' "
+                             f"dimension; got shape {values.shape}")
+        values = np.atleast_1d(values)
         reflectance = xr.DataArray(values, dims="reflectance", coords={"reflectance": values})
+    if "reflectance" not in reflectance.dims:
+        raise ValueError("reflectance must have a 'reflectance' dimension (the brightest value "
+                         f"sets the well-fill scaling); got dims {reflectance.dims}")
     reflectance = params.argument("reflectance", reflectance, allowed_dims=("reflectance",))
     temperature = params.argument("temperature", temperature)
     integration_time = (s["integration_time"] if integration_time is None

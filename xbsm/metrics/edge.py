@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._contract import contract
 from .._metadata import named
 
 __all__ = [
@@ -133,11 +134,10 @@ def edge_response(otf_slice, ifov, position, weights):
     sine, cosine = _edge_kernels(weights, ifov, pos, complex_input)
     h = otf_slice.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
     if complex_input:
-        integral = xr.dot(np.real(h), sine, dim="frequency") + xr.dot(
-            np.imag(h), cosine, dim="frequency"
-        )
+        integral = (contract(np.real(h), sine, "frequency")
+                    + contract(np.imag(h), cosine, "frequency"))
     else:
-        integral = xr.dot(h, sine, dim="frequency")
+        integral = contract(h, sine, "frequency")
     out = 0.5 + integral / np.pi
     return named(out, "1", "edge response", references="IBSM Eq. 3-63")
 

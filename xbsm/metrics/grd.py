@@ -80,6 +80,12 @@ def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first
     .. math:: GRD = R\,\max\left(\frac{1}{u_r},\ 2\theta\right)
     """
     _check_slice(otf_slice, None)
+    if not np.all(np.diff(np.asarray(otf_slice["frequency"].values)) > 0):
+        raise ValueError("otf_slice's frequency coordinate must increase strictly")
+    if not np.all(np.asarray(ifov) >= 0):
+        raise ValueError(f"ifov must lie in [0, inf) rad; got {ifov!r:.60}")
+    if not np.all(np.asarray(slant_range) > 0):
+        raise ValueError(f"slant_range must lie in (0, inf) m; got {slant_range!r:.60}")
     mtf = np.abs(otf_slice.reset_coords(drop=True))
     freq = otf_slice["frequency"].reset_coords(drop=True)
     freq = xr.DataArray(np.asarray(freq), dims="frequency", coords={"frequency": freq.values})

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._contract import contract
 from .._metadata import described
 
 __all__ = ["spectral_average"]
@@ -104,5 +105,5 @@ def spectral_average(otf, weights, dim: str = "wavelength"):
     _nonnegative("weights", weights)
     _require("weights", weights.sum(dim), lambda a: a > 0, f"not all zero along {dim!r}")
     normalised = weights / weights.sum(dim)
-    out = xr.dot(otf, normalised, dim=dim)
+    out = contract(otf, normalised, dim)
     return described(out, spectral_average)

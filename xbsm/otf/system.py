@@ -17,6 +17,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from .._contract import contract
 from .._metadata import named
 from ..methods import Method
 from . import aperture, detector, filters, motion, turbulence, wavefront
@@ -75,6 +76,8 @@ def spectral_bins(wavelength: xr.DataArray, weights: xr.DataArray, count: int):
     group = xr.DataArray(labels, dims="wavelength", name="bin")
     centres = wavelength.groupby(group).mean().rename(bin="wavelength")
     summed = weights.groupby(group).sum().rename(bin="wavelength")
+    if summed.chunks is not None:  # the groupby leaves one chunk per bin; keep the band whole
+        summed = summed.chunk({"wavelength": -1})
     return centres.values, summed.assign_coords(wavelength=centres.values)
 
 
@@ -127,12 +130,12 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
 
     # sensor quantities: evaluated once per sensor, then weighted per scenario
     mono_aperture = aperture.circular_aperture(radial, zero, wl, diameter, s["obscuration_ratio"])
-    ap = xr.dot(mono_aperture, w, dim="wavelength")
+    ap = contract(mono_aperture, w, "wavelength")
     mono_wavefront = wavefront.random_phase_wavefront(
         fx, fy_, wl, s["wavefront_variance"], s["wavefront_correlation_length_x"],
         s["wavefront_correlation_length_y"], s["wavefront_wavelength"],
     )
-    wav = xr.dot(mono_wavefront, w, dim="wavelength")
+    wav = contract(mono_wavefront, w, "wavelength")
     det = detector.detector(fx, fy_, s["detector_width_x"], s["detector_width_y"],
                             s["focal_length"])
     jit = motion.jitter(fx, fy_, s["jitter_x"], s["jitter_y"])

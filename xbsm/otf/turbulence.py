@@ -408,6 +408,7 @@ def polychromatic_turbulence(
         wind_speed, aperture_diameter, reference_wavelength, wavelength, weights,
         input_core_dims=[[], [], [], [], [], [], ["wavelength"], ["wavelength"]],
         dask="parallelized", output_dtypes=[float],
+        dask_gufunc_kwargs={"allow_rechunk": True},  # a binned band may come in pieces
     )
     return described(out, polychromatic_turbulence)
 
