@@ -192,6 +192,15 @@ OTHER_ROWS = [
     ("grd_decreasing_frequency", lambda: xbsm.metrics.ground_resolved_distance(
         xr.DataArray([0.5, 1.0], dims="frequency", coords={"frequency": [1e5, 0.0]}),
         50.0, 1e-5, 1e4), ValueError, "must increase strictly"),
+    ("method_not_a_name", lambda: xbsm.niirs(S, SC, method={"edge_rule": "x"}), ValueError,
+     "method must be one of"),
+    ("otf_fy_nan", lambda: xbsm.system_otf(S, SC, xr.DataArray([0.0, 1e5], dims="fx"),
+                                           fy=xr.DataArray([0.0, np.nan], dims="fy")),
+     ValueError, "fy must lie in"),
+    ("database_not_netcdf", lambda: xbsm.open_atmosphere(__file__), ValueError,
+     "is not an xbsm atmosphere database"),
+    ("database_chunks_bogus", lambda: xbsm.open_atmosphere(chunks="bogus"), ValueError,
+     "chunks must be what xarray's .chunk() takes"),
     ("integration_time_negative", lambda: reflectance_to_photoelectrons(
         S, SC, integration_time=-1.0), ValueError, "integration_time must lie in (0, inf) s"),
 ]

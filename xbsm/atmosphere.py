@@ -142,7 +142,8 @@ def open_atmosphere(path=None, chunks=_FILE_CHUNKS) -> xr.Dataset:
     in float32, so the numbers are bit-identical to pyBSM's. Transmittance is the
     stored value.
     """
-    file = database_path(path)
+    file = str(database_path(path))
+    _load_database(file)  # a clear error for a file that is not the database
     if isinstance(chunks, MappingProxyType):
         with netCDF4.Dataset(file) as nc:
             chunks = dict(zip(nc["atmosphere"].dimensions, nc["atmosphere"].chunking(),
@@ -151,7 +152,11 @@ def open_atmosphere(path=None, chunks=_FILE_CHUNKS) -> xr.Dataset:
     # that reading coordinates never needs a dask compute
     ds = xr.open_dataset(file, engine="netcdf4", chunks=None)
     ds = ds.assign_coords({name: ds[name].load() for name in ds.coords})
-    raw = ds["atmosphere"] if chunks is None else ds["atmosphere"].chunk(chunks)
+    try:
+        raw = ds["atmosphere"] if chunks is None else ds["atmosphere"].chunk(chunks)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"chunks must be what xarray's .chunk() takes (a dict of dimension "
+                         f"sizes, an int, 'auto' or None); got {chunks!r}: {err}") from None
     divisor = xr.DataArray(_DIVISOR, dims="component")
     si = (raw / divisor).astype(np.float32)
     si.attrs = {
@@ -182,11 +187,16 @@ class _Database:
 @functools.lru_cache(maxsize=4)
 def _load_database(path: str) -> _Database:
     """Read the database into memory once per process (no dask involved)."""
-    with netCDF4.Dataset(path) as nc:
-        nc.set_auto_maskandscale(False)
-        cube = nc["atmosphere"][...]
-        coords = {name: np.asarray(nc[name][...], dtype=np.float64)
-                  for name in ("visibility", "altitude", "ground_range", "wavelength")}
+    try:
+        with netCDF4.Dataset(path) as nc:
+            nc.set_auto_maskandscale(False)
+            cube = nc["atmosphere"][...]
+            coords = {name: np.asarray(nc[name][...], dtype=np.float64)
+                      for name in ("visibility", "altitude", "ground_range", "wavelength")}
+    except (OSError, KeyError, IndexError) as err:
+        raise ValueError(f"path {path!r} is not an xbsm atmosphere database (a NetCDF file "
+                         f"with variable 'atmosphere', as recipes/build_atmosphere.py writes): "
+                         f"{err}") from None
     cube = np.ascontiguousarray(cube, dtype=np.float32)
     cube /= _DIVISOR[:, None]  # float32 / float32: pyBSM's bits; NaN stays NaN
     present = ~np.isnan(cube[:, :, :, 0, 0])

@@ -242,7 +242,7 @@ def method(preset: str | Method = "accurate", /, **knobs) -> Method:
     """
     if isinstance(preset, Method):
         base = preset
-    elif preset in PRESETS:
+    elif isinstance(preset, str) and preset in PRESETS:
         base = PRESETS[preset]
     else:
         raise ValueError(f"method must be one of {sorted(PRESETS)} or a Method; got {preset!r}")

@@ -585,8 +585,8 @@ def frequencies(name: str, values: xr.DataArray) -> xr.DataArray:
         raise ValueError(f"{name} has {values.size} values; at most {MAX_FREQUENCIES} per call "
                          "(xbsm.params.MAX_FREQUENCIES): evaluate the grid in pieces")
     own = ("frequency", "fx", "fy", "x", "y")
-    out = argument("frequency", values, allowed_dims=tuple(d for d in values.dims if d in own))
-    return out.rename(name) if name != "frequency" else out
+    allowed = tuple(d for d in values.dims if d in own)
+    return _validated(name, values, ARGUMENT_SPECS["frequency"], allowed)
 
 
 def check_kind(ds: xr.Dataset, kind: str, argument: str) -> None:
