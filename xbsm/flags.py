@@ -65,9 +65,14 @@ FLAGS = MappingProxyType({
         "GIQE 5 only: sampling ratio Q = lambda N / p (lambda the band centre) outside "
         "the 1-2 the GIQE 5 report assumes",
     ),
+    "rer_nonpositive": (
+        2048,
+        "RER at or below zero (a system blurred over many pixels): the GIQE is undefined; "
+        "NIIRS is NaN",
+    ),
 })
 
-INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive")
+INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive", "rer_nonpositive")
 """Bits saying a number is NaN or may be wrong."""
 
 CALIBRATION = (
@@ -84,7 +89,7 @@ NOTICE = ("atmosphere_sparse", "well_fill_limited")
 """Bits that are neither: information about how a number was obtained."""
 
 INVALID_MASK = sum(FLAGS[name][0] for name in INVALID)
-"""OR of the :data:`INVALID` bits (641)."""
+"""OR of the :data:`INVALID` bits (2689)."""
 
 CALIBRATION_MASK = sum(FLAGS[name][0] for name in CALIBRATION)
 """OR of the :data:`CALIBRATION` bits (1400)."""

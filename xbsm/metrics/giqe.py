@@ -327,7 +327,7 @@ def giqe_flags(*, snr, rer, gsd, elevation=None, niirs=None, calibration=GIQE4_C
         given, is not tested.
     """
     cal = _check_calibration(calibration)
-    conds = {"snr_nonpositive": _da(snr) <= 0}
+    conds = {"snr_nonpositive": _da(snr) <= 0, "rer_nonpositive": ~(_da(rer) > 0)}
     tests = (
         ("snr_out_of_range", snr, cal.snr),
         ("rer_out_of_range", rer, cal.rer),
