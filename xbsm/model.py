@@ -235,14 +235,8 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method=
     if frequency is None:
         cutoff = float(_optics_cutoff(sensor, weights["wavelength"]).max())
         frequency = np.linspace(0.0, cutoff, 201)
-    if not isinstance(frequency, xr.DataArray):
-        frequency = np.asarray(frequency)
-        if frequency.ndim > 1:
-            raise ValueError("frequency must be 1-D (the slice frequencies), or an xr.DataArray "
-                             f"with named dimensions; got shape {frequency.shape}")
-        frequency = np.atleast_1d(frequency)
-        frequency = xr.DataArray(frequency, dims="frequency", coords={"frequency": frequency})
-    frequency = params.frequencies("frequency", frequency)
+    frequency = params.frequencies("frequency", params.labelled("frequency", frequency,
+                                                                "frequency"))
     if "frequency" in frequency.coords:
         frequency["frequency"].attrs.update(units="cycles/rad", long_name="spatial frequency")
     if fy is not None:

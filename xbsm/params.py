@@ -572,6 +572,18 @@ def argument(name: str, value, allowed_dims=()) -> xr.DataArray:
     return _validated(name, value, ARGUMENT_SPECS[name], allowed_dims)
 
 
+def labelled(name: str, values, dim: str) -> xr.DataArray:
+    """A DataArray as given, or a plain 1-D sequence labelled along ``dim`` (its own coordinate)."""
+    if isinstance(values, xr.DataArray):
+        return values
+    array = np.asarray(values)
+    if array.ndim > 1:
+        raise ValueError(f"{name} must be 1-D, or an xr.DataArray with named dimensions; "
+                         f"got shape {array.shape}")
+    array = np.atleast_1d(array)
+    return xr.DataArray(array, dims=dim, coords={dim: array})
+
+
 MAX_FREQUENCIES = 1_000_000
 """Most frequencies one model call evaluates (each costs a wavelength axis of OTFs)."""
 

@@ -60,13 +60,7 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
     s, k = sensor, m.constants
     if reflectance is None:
         reflectance = np.linspace(0.0, 1.0, 100)
-    if not isinstance(reflectance, xr.DataArray):
-        values = np.asarray(reflectance)
-        if values.ndim > 1:
-            raise ValueError("reflectance must be 1-D, or an xr.DataArray with a 'reflectance' "
-                             f"dimension; got shape {values.shape}")
-        values = np.atleast_1d(values)
-        reflectance = xr.DataArray(values, dims="reflectance", coords={"reflectance": values})
+    reflectance = params.labelled("reflectance", reflectance, "reflectance")
     if "reflectance" not in reflectance.dims:
         raise ValueError("reflectance must have a 'reflectance' dimension (the brightest value "
                          f"sets the well-fill scaling); got dims {reflectance.dims}")
