@@ -160,9 +160,9 @@ OTHER_ROWS = [
     ("temperature_zero", lambda: reflectance_to_photoelectrons(S, SC, temperature=0.0),
      ValueError, "temperature must lie in (0, inf) K"),
     ("sensor_dims_disagree", lambda: xbsm.sensor(**{
-        **SENSOR, "focal_length": xr.DataArray([3.0, 4.0], dims="position"),
-        "jitter_x": xr.DataArray([1e-6, 2e-6, 3e-6], dims="position")}),
-     ValueError, "both sweep dimension 'position'"),
+        **SENSOR, "focal_length": xr.DataArray([3.0, 4.0], dims="case"),
+        "jitter_x": xr.DataArray([1e-6, 2e-6, 3e-6], dims="case")}),
+     ValueError, "both sweep dimension 'case'"),
     ("kernel_string", lambda: xbsm.sensor(**SENSOR, filter_kernel="sharpen"), ValueError,
      "filter_kernel must be a 2-D array"),
     ("edited_band", lambda: xbsm.niirs(S.assign(wavelength_min=9e-6), SC), ValueError,

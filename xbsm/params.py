@@ -159,7 +159,7 @@ SCENARIO_SPECS: dict[str, Spec] = {
 #: merge silently with xbsm's own axis), nor the name of another parameter.
 RESERVED_DIMS = (
     "wavelength", "frequency", "orientation", "giqe", "fx", "fy", "x", "y", "component",
-    "kernel_x", "kernel_y", "reflectance", "path",
+    "kernel_x", "kernel_y", "reflectance", "path", "position", "bin",
     *(f"{name}_wavelength" for name in ("optics_transmission", "quantum_efficiency",
                                           "stray_irradiance")),
 )
