@@ -49,7 +49,8 @@ def otf_weights(spectral_weights: xr.DataArray) -> xr.DataArray:
     """
     weights = spectral_weights.where(spectral_weights > 0, 0.0)
     usable = weights.sum("wavelength") > 0
-    return xr.where(usable, weights, 1.0)
+    return named(xr.where(usable, weights, 1.0), "s-1 m-1",
+                 "spectral weights of the polychromatic OTFs")
 
 
 def spectral_bins(wavelength: xr.DataArray, weights: xr.DataArray, count: int):
