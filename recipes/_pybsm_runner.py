@@ -20,7 +20,9 @@ import venv
 
 from _pybsm_env import MAKE_VENV, VENV, missing_pybsm_message
 
-CHILD = r'''
+#: Start of every child script: imports, the job from stdin, and pyBSM objects from the
+#: keyword dictionaries of tests/fixtures/pybsm_cases.json.
+CHILD_PRELUDE = r'''
 import json, sys, time
 import numpy as np
 from pybsm.simulation import Sensor, Scenario
@@ -39,6 +41,9 @@ def build(sensor_kw, scenario_kw):
     for key, value in post.items():
         setattr(s, key, np.asarray(value, dtype=float) if isinstance(value, list) else value)
     return s, Scenario(**scenario_kw)
+'''
+
+CHILD = CHILD_PRELUDE + r'''
 
 def snr_only(s, sc):
     atm = utils.load_database_atmosphere_no_interp(

@@ -67,7 +67,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 from _pybsm_env import missing_pybsm_message
-from _pybsm_runner import pybsm_python
+from _pybsm_runner import CHILD_PRELUDE, pybsm_python
 
 import xbsm
 from xbsm.examples import olson_scenario, olson_sensor
@@ -81,26 +81,8 @@ METHODS = ("pybsm", "accurate", "fast")
 WARMUP = 2
 PROFILE_SCENARIO = "olson_red"
 
-CHILD = r'''
-import json, sys, time
+CHILD = CHILD_PRELUDE + r'''
 from importlib.metadata import version
-import numpy as np
-from pybsm.simulation import Sensor, Scenario
-from pybsm.metrics import functional as metrics
-from pybsm import radiance, utils
-
-job = json.load(sys.stdin)
-
-def build(sensor_kw, scenario_kw):
-    kw = dict(sensor_kw)
-    post = kw.pop("post", {})
-    for key in ("opt_trans_wavelengths", "qe", "qe_wavelengths"):
-        if key in kw:
-            kw[key] = np.asarray(kw[key], dtype=float)
-    s = Sensor(**kw)
-    for key, value in post.items():
-        setattr(s, key, np.asarray(value, dtype=float) if isinstance(value, list) else value)
-    return s, Scenario(**scenario_kw)
 
 def snr(s, sc, interp):
     load = utils.load_database_atmosphere if interp else utils.load_database_atmosphere_no_interp
