@@ -11,6 +11,8 @@ is outside the version's calibration. RER and EHO come from
 from __future__ import annotations
 
 import dataclasses
+import functools
+import operator
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -344,10 +346,14 @@ def giqe_flags(*, snr, rer, gsd, elevation=None, niirs=None, calibration=GIQE4_C
         if name == "q_out_of_range" and "orientation" in cond.dims:
             cond = cond.any("orientation")
         conds[name] = conds[name] | cond if name in conds else cond
-    out = _flags.empty_flags(xr.broadcast(*conds.values())[0])
-    for name, cond in conds.items():
-        out = _flags.set_flag(out, name, cond)
-    return out.assign_attrs(_flags.flag_attrs("GIQE validity flags"))
+    # one alignment for every condition, then the bits in plain (numpy or dask) arithmetic
+    aligned = xr.broadcast(*conds.values())
+    bits = functools.reduce(operator.or_, (
+        np.where(cond.data, np.int32(_flags.flag(name)), np.int32(0))
+        for name, cond in zip(conds, aligned, strict=True)))
+    out = aligned[0].copy(data=bits.astype(np.int32))
+    out.attrs = _flags.flag_attrs("GIQE validity flags")
+    return out
 
 
 def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
