@@ -7,8 +7,15 @@ runs each scenario once with ``niirs`` and ``niirs5`` (GIQE 3/4 and 5). xbsm
 runs the same scenarios with a 25-value focal-length sweep on top (9,700
 scenarios, GIQE 3, 4 and 5 at once) per method; medians of repeated runs.
 The per-scenario ratio is pyBSM's median time per scenario over xbsm's time
-per scenario. Writes ``docs/benchmarks/bench_niirs.json`` and
-``docs/figures/bench_niirs.png``; ``docs/benchmarks.md`` quotes them.
+per scenario. Then the sweep (both bands, one ``xbsm.niirs`` call each) runs
+once more per method under cProfile, its time grouped by xbsm stage/module
+(``atmosphere``, ``radiometry``, ``noise``, ``quadrature``, ``otf.*``,
+``metrics.*``, ``model``, ``params``, ``geometry``, ``_contract``,
+``_metadata``, ``flags``) with "xarray overhead" split out, by the rule of
+``recipes/_profile.py`` (shared with ``bench_single.py``); the microseconds
+per scenario of each stage are its share times the unprofiled median. Writes
+``docs/benchmarks/bench_niirs.json`` and ``docs/figures/bench_niirs.png``;
+``docs/benchmarks.md`` quotes them.
 
 Run from the repository root with the project environment; pyBSM's own
 environment is made on first use (see ``recipes/README.md``)::
@@ -20,19 +27,23 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import statistics
+import subprocess
 import time
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from _profile import profile_call, stack_shares
 from _pybsm_runner import run_pybsm
 
 import xbsm
 from xbsm.examples import DATABASE_GROUND_RANGES, OLSON_BANDS, olson_scenario, olson_sensor
 
-DOCS = Path(__file__).resolve().parent.parent / "docs"
+ROOT = Path(__file__).resolve().parent.parent
+DOCS = ROOT / "docs"
 FOCAL_LENGTHS = np.linspace(2.0, 6.0, 25)
 METHODS = ("pybsm", "fast", "accurate")
 
@@ -78,6 +89,70 @@ def time_xbsm(method, repeats):
     return statistics.median(times), n
 
 
+def profile_sweep(method, per_scenario_s):
+    """The timed sweep once under cProfile, grouped by xbsm module (recipes/_profile.py)."""
+    f = xr.DataArray(FOCAL_LENGTHS, dims="focal_length")
+    sensors = [olson_sensor(band, focal_length=f) for band in OLSON_BANDS]
+    scenario = olson_scenario()
+
+    def sweep():
+        for s in sensors:
+            xbsm.niirs(s, scenario, method=method)["niirs"].values  # noqa: B018
+
+    sweep()  # warm
+    result = profile_call(sweep)
+    for row in result["by_module"].values():
+        row["us_per_scenario"] = 1e6 * per_scenario_s * row["share"]
+    result["xarray_overhead_us_per_scenario"] = (
+        1e6 * per_scenario_s * result["xarray_overhead_share"])
+    result["unprofiled_per_scenario_us"] = 1e6 * per_scenario_s
+    result["stack_check"] = stack_shares(sweep)
+    return result
+
+
+def print_profile(profiles):
+    methods = list(profiles)
+    print("\nprofile of the Olson sweep (both bands, 9,700 scenarios; cProfile), per stage: "
+          "us per scenario (own code + numpy / xarray below it), share")
+    print(f"{'stage':22s}" + "".join(f"{m:>28s}" for m in methods))
+    modules = []
+    for p in profiles.values():
+        modules += [m for m in p["by_module"] if m not in modules]
+    for module in modules:
+        cells = []
+        for m in methods:
+            row = profiles[m]["by_module"].get(module)
+            if row:
+                k = profiles[m]["unprofiled_per_scenario_us"] / profiles[m]["profiled_total_ms"]
+                cells.append(f"{k * row['own_ms']:6.1f} / {k * row['xarray_ms']:6.1f} "
+                             f"({row['share']:4.0%})")
+            else:
+                cells.append("")
+        print(f"{module:22s}" + "".join(f"{c:>28s}" for c in cells))
+    for label, fmt in (("xarray overhead", lambda p: f"{p['xarray_overhead_us_per_scenario']:.1f} "
+                        f"us ({p['xarray_overhead_share']:.0%})"),
+                       ("unprofiled", lambda p: f"{p['unprofiled_per_scenario_us']:.1f} us"),
+                       ("profiled total", lambda p: f"{p['profiled_total_ms']:.0f} ms"),
+                       ("function calls", lambda p: f"{p['function_calls']}")):
+        print(f"{label:22s}" + "".join(f"{fmt(profiles[m]):>28s}" for m in methods))
+    print("check: shares from the exact call stack (sys.setprofile)")
+    for module in modules:
+        print(f"{module:22s}" + "".join(
+            f"{profiles[m]['stack_check']['by_module_share'].get(module, 0.0):28.0%}"
+            for m in methods))
+    print(f"{'xarray overhead':22s}" + "".join(
+        f"{profiles[m]['stack_check']['xarray_overhead_share']:28.0%}" for m in methods))
+
+
+def commit():
+    def git(*args):
+        proc = subprocess.run(["git", "-C", str(ROOT), *args], capture_output=True, text=True)
+        return proc.stdout.strip() if proc.returncode == 0 else None
+
+    return {"commit": git("rev-parse", "--short", "HEAD"),
+            "xbsm_modified_since_commit": bool(git("status", "--porcelain", "--", "xbsm"))}
+
+
 def agreement(cases, values):
     """Largest |NIIRS difference| between xbsm method="pybsm" and pyBSM on every case."""
     worst = 0.0
@@ -107,6 +182,7 @@ def main():
     parser.add_argument("--repeats", type=int, default=3, help="xbsm repeats (median)")
     args = parser.parse_args()
 
+    load_start = os.getloadavg()
     cases = pybsm_cases()
     pybsm = run_pybsm("niirs", cases)
     pybsm_per = statistics.median(pybsm["times"])
@@ -125,11 +201,21 @@ def main():
     print(f"largest |NIIRS difference| between xbsm method='pybsm' and pyBSM over the "
           f"{len(cases)} scenarios (GIQE 3, 4, 5): {worst:.1e}")
 
+    profiles = {m: profile_sweep(m, rows[m]["per_scenario_s"]) for m in METHODS}
+    print_profile(profiles)
+    load_end = os.getloadavg()
+    print(f"load average (1, 5, 15 min) at start {load_start}, at end {load_end}")
+
     record = {
         "pybsm_scenarios": len(cases), "pybsm_per_scenario_s": pybsm_per, "xbsm": rows,
         "max_abs_niirs_difference": worst,
         "machine": f"{platform.machine()} python {platform.python_version()}",
-        "date": time.strftime("%Y-%m-%d"),
+        "cpu_count": os.cpu_count(), "repeats": args.repeats,
+        "date": time.strftime("%Y-%m-%d"), **commit(),
+        "load_average_at_start": load_start, "load_average_at_end": load_end,
+        "versions": {"xbsm": xbsm.__version__, "xarray": xr.__version__,
+                     "numpy": np.__version__},
+        "profile": profiles,
     }
     (DOCS / "benchmarks").mkdir(parents=True, exist_ok=True)
     (DOCS / "benchmarks" / "bench_niirs.json").write_text(json.dumps(record, indent=1))

@@ -28,7 +28,8 @@ The two alternate scenario by scenario (pyBSM's child process, then xbsm), so
 that both see about the same machine load; the load average is recorded at
 each step.
 
-Then one xbsm ``niirs`` call per method on ``olson_red`` runs under cProfile;
+Then one xbsm ``niirs`` call per method on ``olson_red`` runs under cProfile
+(the grouping lives in ``recipes/_profile.py``, shared with ``bench_niirs.py``);
 its time is attributed to the innermost xbsm module on the call stack
 (``atmosphere``, ``radiometry``, ``noise``, ``otf.*``, ``quadrature``,
 ``metrics``, ``model``, ``params``, ...), split into that module's own code
@@ -41,31 +42,29 @@ walking the stack at every event) gives the same shares as a check. Both
 profilers slow the call down; the shares, not the profiled times, are the
 result.
 
-Writes ``docs/benchmarks/bench_single.json`` (machine, load average at start
-and end, versions, commit, every timing and the profile); ``docs/benchmarks.md``
+Writes ``docs/benchmarks/bench_single.json``, or ``--out PATH`` (machine, load
+average at start and end, versions, commit, every timing and the profile); ``docs/benchmarks.md``
 quotes it. Run from the repository root with the project environment;
 pyBSM's own environment is made on first use (see ``recipes/README.md``)::
 
-    .venv/bin/python recipes/bench_single.py [--calls 20]
+    .venv/bin/python recipes/bench_single.py [--calls 20] [--out PATH]
 """
 
 from __future__ import annotations
 
 import argparse
-import cProfile
 import json
 import os
 import platform
-import pstats
 import statistics
 import subprocess
 import sys
 import time
-from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from _profile import profile_call, stack_shares
 from _pybsm_env import missing_pybsm_message
 from _pybsm_runner import CHILD_PRELUDE, pybsm_python
 
@@ -234,223 +233,18 @@ def agreement(build, pybsm_values):
 
 # ---------------------------------------------------------------- profile
 
-XBSM_DIR = Path(xbsm.__file__).resolve().parent
-XARRAY_DIR = Path(xr.__file__).resolve().parent
-
-
-def _under(filename, folder):
-    try:
-        Path(filename).resolve().relative_to(folder)
-    except (ValueError, OSError):
-        return False
-    return True
-
-
-def short_name(func):
-    """'package/module.py:line(name)' without the machine's folders."""
-    filename, line, name = func
-    if filename.startswith(("~", "<")):
-        return name
-    path = Path(filename).resolve()
-    for base in sorted({XBSM_DIR.parent, XARRAY_DIR.parent, *map(Path, sys.path)},
-                       key=lambda p: len(str(p)), reverse=True):
-        try:
-            return f"{path.relative_to(Path(base).resolve())}:{line}({name})"
-        except (ValueError, OSError):
-            continue
-    return f"{path.name}:{line}({name})"
-
-
-def attribute(stats):
-    """Self time of every function -> {(innermost xbsm module, through xarray?): seconds}.
-
-    The time of a function outside xbsm climbs the caller graph until it reaches an xbsm
-    function: at the first step in proportion to the self time recorded for each caller
-    pair, above that in proportion to each pair's cumulative time (cProfile keeps no
-    deeper stacks). "Through xarray" means an xarray function was passed on the way. The
-    climb is an absorbing Markov chain (recursion makes cycles), solved exactly with one
-    sparse linear solve.
-    """
-    from scipy.sparse import coo_matrix, identity
-    from scipy.sparse.linalg import spsolve
-
-    raw = stats.stats  # {func: (cc, nc, tt, ct, {caller: (nc, cc, tt, ct)})}
-    kind = {}
-
-    def classify(func):
-        if func not in kind:
-            filename = func[0]
-            if _under(filename, XBSM_DIR):
-                rel = Path(filename).resolve().relative_to(XBSM_DIR).with_suffix("")
-                parts = [p for p in rel.parts if p != "__init__"] or ["__init__"]
-                kind[func] = ("xbsm", ".".join(parts))
-            elif _under(filename, XARRAY_DIR):
-                kind[func] = ("xarray", None)
-            else:
-                kind[func] = ("other", None)
-        return kind[func]
-
-    states, buckets = {}, {}  # (func, through_xarray) -> row; bucket -> column
-    p_rows, p_cols, p_vals, a_rows, a_cols, a_vals = [], [], [], [], [], []
-    pending = []
-
-    def state(func, through):
-        key = (func, through)
-        if key not in states:
-            states[key] = len(states)
-            pending.append(key)
-        return states[key]
-
-    def column(bucket):
-        return buckets.setdefault(bucket, len(buckets))
-
-    def split(func, through, weight):
-        """(caller target, probability) pairs for time spent in ``func``."""
-        through = through or classify(func)[0] == "xarray"
-        callers = {c: e for c, e in raw[func][4].items() if c != func}
-        if not callers:
-            return [(("bucket", ("(outside xbsm)", through)), 1.0)]
-        weights = {c: e[weight] for c, e in callers.items()}
-        if sum(weights.values()) <= 0:
-            weights = {c: e[0] for c, e in callers.items()}  # by number of calls
-        total = sum(weights.values())
-        out = []
-        for caller, w in weights.items():
-            c_kind, c_module = classify(caller)
-            target = (("bucket", (c_module, through)) if c_kind == "xbsm"
-                      else ("state", (caller, through)))
-            out.append((target, w / total))
-        return out
-
-    source = defaultdict(float)  # state row -> seconds entering it
-    direct = defaultdict(float)  # bucket -> seconds
-    for func, (_cc, _nc, tt, _ct, _callers) in raw.items():
-        if tt <= 0:
-            continue
-        f_kind, module = classify(func)
-        if f_kind == "xbsm":
-            direct[(module, False)] += tt
-            continue
-        for (what, key), prob in split(func, False, 2):
-            if what == "bucket":
-                direct[key] += tt * prob
-            else:
-                source[state(*key)] += tt * prob
-    while pending:
-        func, through = pending.pop()
-        row = states[(func, through)]
-        for (what, key), prob in split(func, through, 3):
-            if what == "bucket":
-                a_rows.append(row)
-                a_cols.append(column(key))
-                a_vals.append(prob)
-            else:
-                p_rows.append(row)
-                p_cols.append(state(*key))
-                p_vals.append(prob)
-    out = defaultdict(float, direct)
-    n = len(states)
-    if n:
-        transition = coo_matrix((p_vals, (p_rows, p_cols)), shape=(n, n)).tocsc()
-        absorb = coo_matrix((a_vals, (a_rows, a_cols)), shape=(n, len(buckets))).tocsr()
-        s = np.zeros(n)
-        for row, seconds in source.items():
-            s[row] = seconds
-        # seconds passing through each state: (I - P)^T m = s
-        mass = spsolve((identity(n, format="csc") - transition).T.tocsc(), s)
-        totals = absorb.T @ mass
-        for bucket, col in buckets.items():
-            out[bucket] += float(totals[col])
-    return out
-
-
-def stack_shares(s, sc, method):
-    """The same grouping, exact: walk the Python stack at every profiler event.
-
-    A check on :func:`attribute`'s proportional rule (``sys.setprofile``; the time
-    between two events goes to the innermost xbsm frame then on the stack, as xarray
-    overhead if an xarray frame lies above it). Slower than cProfile; shares only.
-    """
-    xb, xa = str(XBSM_DIR), str(XARRAY_DIR)
-    cache = {}
-
-    def owner(frame):
-        through = False
-        while frame is not None:
-            filename = frame.f_code.co_filename
-            k = cache.get(filename)
-            if k is None:
-                path = str(Path(filename).resolve()) if not filename.startswith("<") else ""
-                if path.startswith(xb + os.sep):
-                    rel = Path(path).relative_to(xb).with_suffix("")
-                    k = ("xbsm", ".".join(p for p in rel.parts if p != "__init__") or "__init__")
-                else:
-                    k = ("xarray" if path.startswith(xa + os.sep) else "other", None)
-                cache[filename] = k
-            if k[0] == "xbsm":
-                return (k[1], through)
-            through = through or k[0] == "xarray"
-            frame = frame.f_back
-        return ("(outside xbsm)", through)
-
-    acc = defaultdict(float)
-    current = [None, 0.0]
-
-    def hook(frame, event, arg):
-        t = time.perf_counter()
-        if current[0] is not None:
-            acc[current[0]] += t - current[1]
-        current[0] = owner(frame.f_back if event == "return" else frame)
-        current[1] = time.perf_counter()
-
-    sys.setprofile(hook)
-    try:
-        xbsm.niirs(s, sc, method=method)
-    finally:
-        sys.setprofile(None)
-    total = sum(acc.values())
-    modules = defaultdict(float)
-    for (module, _), seconds in acc.items():
-        modules[module] += seconds / total
-    xarray = sum(v for (_, through), v in acc.items() if through) / total
-    return {"by_module_share": dict(sorted(modules.items(), key=lambda kv: -kv[1])),
-            "xarray_overhead_share": xarray}
-
-
 def profile_niirs(build, method):
+    """One xbsm.niirs call under cProfile, grouped by module (``recipes/_profile.py``)."""
     s, sc = build()
     xbsm.niirs(s, sc, method=method)  # warm
     t0 = time.perf_counter()
     xbsm.niirs(s, sc, method=method)
     unprofiled = time.perf_counter() - t0
-    profiler = cProfile.Profile()
-    profiler.enable()
-    xbsm.niirs(s, sc, method=method)
-    profiler.disable()
-    stats = pstats.Stats(profiler)
-    total = stats.total_tt
-    buckets = attribute(stats)
-    modules = defaultdict(lambda: {"own_ms": 0.0, "xarray_ms": 0.0})
-    for (module, via_xarray), seconds in buckets.items():
-        modules[module]["xarray_ms" if via_xarray else "own_ms"] += 1e3 * seconds
-    for row in modules.values():
-        row["total_ms"] = row["own_ms"] + row["xarray_ms"]
-        row["share"] = row["total_ms"] / (1e3 * total)
-    xarray_ms = sum(r["xarray_ms"] for r in modules.values())
-
-    def top(key, n=25):
-        rows = sorted(stats.stats.items(), key=lambda kv: kv[1][key], reverse=True)[:n]
-        return [{"function": short_name(f), "ncalls": v[1], "tottime_ms": 1e3 * v[2],
-                 "cumtime_ms": 1e3 * v[3]} for f, v in rows]
-
+    result = profile_call(lambda: xbsm.niirs(s, sc, method=method))
     return {
         "method": method, "scenario": PROFILE_SCENARIO,
-        "unprofiled_call_ms": 1e3 * unprofiled, "profiled_total_ms": 1e3 * total,
-        "function_calls": sum(v[1] for v in stats.stats.values()),
-        "xarray_overhead_ms": xarray_ms, "xarray_overhead_share": xarray_ms / (1e3 * total),
-        "by_module": dict(sorted(modules.items(), key=lambda kv: -kv[1]["total_ms"])),
-        "top_cumulative": top(3), "top_self": top(2),
-        "stack_check": stack_shares(s, sc, method),
+        "unprofiled_call_ms": 1e3 * unprofiled, **result,
+        "stack_check": stack_shares(lambda: xbsm.niirs(s, sc, method=method)),
     }
 
 
@@ -572,6 +366,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=20, help="timed calls per function "
                         f"(after {WARMUP} warm-up calls); median, quartiles, min, max")
+    parser.add_argument("--out", type=Path, default=DOCS / "benchmarks" / "bench_single.json",
+                        help="JSON file to write (default docs/benchmarks/bench_single.json)")
     args = parser.parse_args()
     if args.calls < 2:
         parser.error("--calls must be at least 2")
@@ -579,7 +375,8 @@ def main():
     t_start = time.perf_counter()
     record = {"description": __doc__.split("\n\n")[0],
               "command": "python recipes/bench_single.py" + (
-                  f" --calls {args.calls}" if args.calls != 20 else ""),
+                  f" --calls {args.calls}" if args.calls != 20 else "") + (
+                  f" --out {args.out}" if args.out != parser.get_default("out") else ""),
               "load_average_at_start": os.getloadavg(), "date": time.strftime("%Y-%m-%d"),
               **commit(), "machine": machine(), "calls": args.calls, "warmup_calls": WARMUP}
     cases = scenarios()
@@ -614,9 +411,9 @@ def main():
     print_profile(record["profile"])
     print(f"\nload average at start {record['load_average_at_start']}, at end "
           f"{record['load_average_at_end']}; {record['runtime_s']:.0f} s")
-    (DOCS / "benchmarks").mkdir(parents=True, exist_ok=True)
-    (DOCS / "benchmarks" / "bench_single.json").write_text(
-        json.dumps(record, indent=1, default=float) + "\n")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(record, indent=1, default=float) + "\n")
+    print(f"wrote {args.out}", file=sys.stderr)
 
 
 if __name__ == "__main__":
