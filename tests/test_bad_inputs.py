@@ -271,6 +271,17 @@ def test_beyond_the_horizon_is_flagged_not_silent():
     assert bool(has_flag(o.flags, "beyond_database"))
 
 
+def test_a_system_blurred_over_many_pixels_is_flagged_not_trusted():
+    # RER 0.019 from 20 px of jitter: the edge quadrature does not resolve the narrow OTF
+    # (recipes/preset_error.py: accurate off by up to 3.6 NIIRS below RER 0.05)
+    blurred = xbsm.sensor(**{**SENSOR, "jitter_x": 160e-6, "jitter_y": 160e-6})
+    n = xbsm.niirs(blurred, SC)
+    assert float(n.rer) < 0.05
+    assert bool(xbsm.flags.decode(n.flags).blur_unresolved.all())
+    assert bool(xbsm.flags.is_invalid(n.flags).all())
+    assert not bool(xbsm.flags.decode(xbsm.niirs(S, SC).flags).blur_unresolved.any())
+
+
 def test_method_overrides_are_recorded_in_the_result():
     n = xbsm.niirs(S, SC, xbsm.method("pybsm", frequency_samples=201))
     assert n.attrs["method"] == "pybsm (frequency_samples=201)"
