@@ -17,7 +17,7 @@ from .methods import Method
 from .methods import method as resolve_method
 from .otf.system import otf_weights, system_components
 from .params import check_inputs
-from .quadrature import edge_nodes, optics_cutoff, undersampled
+from .quadrature import UNRESOLVED_RER, edge_nodes, sensor_cutoff, undersampled
 
 
 def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets="giqe"):
@@ -84,13 +84,6 @@ def _band_atmosphere(sensor: xr.Dataset, scenario: xr.Dataset, m: Method) -> xr.
         scenario["altitude"], scenario["ground_range"], scenario["visibility"],
         sensor["wavelength_min"], sensor["wavelength_max"],
         interpolation=m.atmosphere_interpolation, band_edges=m.band_edges)
-
-
-def _optics_cutoff(sensor: xr.Dataset, wavelength: xr.DataArray) -> xr.DataArray:
-    """The optics cutoff over the band, from the sensor's QE and transmission curves."""
-    curves = [radiometry.resample_spectral(sensor[name], wavelength, name)
-              for name in ("quantum_efficiency", "optics_transmission")]
-    return optics_cutoff(sensor["aperture_diameter"], wavelength, *curves)
 
 
 def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibration=None):
@@ -166,7 +159,7 @@ def _edge_terms(s: xr.Dataset, sc: xr.Dataset, r: xr.Dataset, view: xr.Dataset,
                 m: Method) -> xr.Dataset:
     """RER and EHO of the system OTF on the x and y slices, at the method's quadrature nodes."""
     weights = r["spectral_weights"]
-    cutoff = _optics_cutoff(s, weights["wavelength"])
+    cutoff = sensor_cutoff(s, weights["wavelength"])
     ifov_x, ifov_y = view["ifov_x"], view["ifov_y"]
     nodes, quad_weights = edge_nodes(cutoff, ifov_x, ifov_y, **m.edge_quadrature_knobs())
     otf = system_components(s, sc, nodes, spectral_weights=otf_weights(weights),
@@ -188,8 +181,6 @@ def _edge_terms(s: xr.Dataset, sc: xr.Dataset, r: xr.Dataset, view: xr.Dataset,
     coarse = False
     if m.edge_rule == "uniform_trapezoid":
         coarse = undersampled(nodes, cutoff, ifov_x, ifov_y, m.undersampling_threshold)
-    # measured over 240 random systems (recipes/preset_error.py): accurate is within 6.2e-4
-    # NIIRS where RER >= 0.05 (1e-5 where RER >= 0.15) and off by up to 3.6 below 0.05
     blurred = np.sqrt(terms["rer_x"] * terms["rer_y"]) < UNRESOLVED_RER
     flags = fl.set_flag(xr.DataArray(np.int32(0)), "undersampled_grid", coarse)
     return xr.Dataset({
@@ -205,9 +196,6 @@ def _edge_terms(s: xr.Dataset, sc: xr.Dataset, r: xr.Dataset, view: xr.Dataset,
         "undersampled": fl.set_flag(flags, "blur_unresolved", blurred),
     })
 
-
-UNRESOLVED_RER = 0.05
-"""Below this RER (geometric mean) the edge-response quadrature is not converged."""
 
 
 def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method="accurate",
@@ -241,7 +229,7 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method=
     r = _snr(sensor, scenario, m, "giqe")
     weights = r["spectral_weights"]
     if frequency is None:
-        cutoff = float(_optics_cutoff(sensor, weights["wavelength"]).max())
+        cutoff = float(sensor_cutoff(sensor, weights["wavelength"]).max())
         frequency = np.linspace(0.0, cutoff, 201)
     frequency = params.frequencies("frequency", params.labelled("frequency", frequency,
                                                                 "frequency"))
