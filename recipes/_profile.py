@@ -246,3 +246,22 @@ def profile_call(fn, top_n=25):
         "by_module": dict(sorted(modules.items(), key=lambda kv: -kv[1]["total_ms"])),
         "top_cumulative": top(3), "top_self": top(2),
     }
+
+
+def print_by_module(profiles, title, cell, width=24, label="module"):
+    """Print one row per xbsm module and one column per method; return (methods, modules).
+
+    ``profiles`` maps a method name to a profile with a ``by_module`` table;
+    ``cell(profile, row)`` formats one module's row of one method.
+    """
+    methods = list(profiles)
+    print(title)
+    print(f"{label:22s}" + "".join(f"{m:>{width}s}" for m in methods))
+    modules = []
+    for profile in profiles.values():
+        modules += [m for m in profile["by_module"] if m not in modules]
+    for module in modules:
+        cells = [cell(profiles[m], profiles[m]["by_module"][module])
+                 if module in profiles[m]["by_module"] else "" for m in methods]
+        print(f"{module:22s}" + "".join(f"{c:>{width}s}" for c in cells))
+    return methods, modules

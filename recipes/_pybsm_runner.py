@@ -99,13 +99,15 @@ def run_pybsm(kind: str, cases: list[dict]) -> dict:
 
     Returns ``{"times": [s per case], "values": [...]}``.
     """
+    return run_child(CHILD, {"kind": kind, "cases": cases})
+
+
+def run_child(script: str, job: dict) -> dict:
+    """Run ``script`` in pyBSM's environment (one numba thread) on ``job``; its JSON answer."""
     env = dict(os.environ, NUMBA_NUM_THREADS="1", PYTHONWARNINGS="ignore")
     python = pybsm_python()
-    proc = subprocess.run(
-        [python, "-c", CHILD],
-        input=json.dumps({"kind": kind, "cases": cases}),
-        capture_output=True, text=True, env=env,
-    )
+    proc = subprocess.run([python, "-c", script], input=json.dumps(job), capture_output=True,
+                          text=True, env=env)
     if proc.returncode:
         if "No module named 'pybsm" in proc.stderr:
             raise SystemExit(missing_pybsm_message(python))

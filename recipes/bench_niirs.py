@@ -30,13 +30,13 @@ import json
 import os
 import platform
 import statistics
-import subprocess
 import time
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
-from _profile import profile_call, stack_shares
+from _profile import print_by_module, profile_call, stack_shares
+from _provenance import commit
 from _pybsm_runner import run_pybsm
 
 import xbsm
@@ -111,24 +111,14 @@ def profile_sweep(method, per_scenario_s):
 
 
 def print_profile(profiles):
-    methods = list(profiles)
-    print("\nprofile of the Olson sweep (both bands, 9,700 scenarios; cProfile), per stage: "
-          "us per scenario (own code + numpy / xarray below it), share")
-    print(f"{'stage':22s}" + "".join(f"{m:>28s}" for m in methods))
-    modules = []
-    for p in profiles.values():
-        modules += [m for m in p["by_module"] if m not in modules]
-    for module in modules:
-        cells = []
-        for m in methods:
-            row = profiles[m]["by_module"].get(module)
-            if row:
-                k = profiles[m]["unprofiled_per_scenario_us"] / profiles[m]["profiled_total_ms"]
-                cells.append(f"{k * row['own_ms']:6.1f} / {k * row['xarray_ms']:6.1f} "
-                             f"({row['share']:4.0%})")
-            else:
-                cells.append("")
-        print(f"{module:22s}" + "".join(f"{c:>28s}" for c in cells))
+    def cell(profile, row):
+        k = profile["unprofiled_per_scenario_us"] / profile["profiled_total_ms"]
+        return f"{k * row['own_ms']:6.1f} / {k * row['xarray_ms']:6.1f} ({row['share']:4.0%})"
+
+    methods, modules = print_by_module(
+        profiles, "\nprofile of the Olson sweep (both bands, 9,700 scenarios; cProfile), per "
+        "stage: us per scenario (own code + numpy / xarray below it), share", cell, width=28,
+        label="stage")
     for label, fmt in (("xarray overhead", lambda p: f"{p['xarray_overhead_us_per_scenario']:.1f} "
                         f"us ({p['xarray_overhead_share']:.0%})"),
                        ("unprofiled", lambda p: f"{p['unprofiled_per_scenario_us']:.1f} us"),
@@ -142,15 +132,6 @@ def print_profile(profiles):
             for m in methods))
     print(f"{'xarray overhead':22s}" + "".join(
         f"{profiles[m]['stack_check']['xarray_overhead_share']:28.0%}" for m in methods))
-
-
-def commit():
-    def git(*args):
-        proc = subprocess.run(["git", "-C", str(ROOT), *args], capture_output=True, text=True)
-        return proc.stdout.strip() if proc.returncode == 0 else None
-
-    return {"commit": git("rev-parse", "--short", "HEAD"),
-            "xbsm_modified_since_commit": bool(git("status", "--porcelain", "--", "xbsm"))}
 
 
 def agreement(cases, values):

@@ -57,16 +57,15 @@ import json
 import os
 import platform
 import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
-from _profile import profile_call, stack_shares
-from _pybsm_env import missing_pybsm_message
-from _pybsm_runner import CHILD_PRELUDE, pybsm_python
+from _profile import print_by_module, profile_call, stack_shares
+from _provenance import commit, machine
+from _pybsm_runner import CHILD_PRELUDE, run_child
 
 import xbsm
 from xbsm.examples import olson_scenario, olson_sensor
@@ -186,18 +185,8 @@ def timed(fn, calls):
 
 def run_pybsm_single(cases, calls):
     """Time pyBSM on each case in its own process (as _pybsm_runner.run_pybsm does)."""
-    env = dict(os.environ, NUMBA_NUM_THREADS="1", PYTHONWARNINGS="ignore")
-    python = pybsm_python()
-    job = {"calls": calls, "warmup": WARMUP,
-           "scenarios": [dict(kw, name=name) for name, kw in cases.items()]}
-    proc = subprocess.run([python, "-c", CHILD], input=json.dumps(job), capture_output=True,
-                          text=True, env=env)
-    if proc.returncode:
-        if "No module named 'pybsm" in proc.stderr:
-            raise SystemExit(missing_pybsm_message(python))
-        sys.stderr.write(proc.stderr)
-        proc.check_returncode()
-    return json.loads(proc.stdout)
+    return run_child(CHILD, {"calls": calls, "warmup": WARMUP,
+                             "scenarios": [dict(kw, name=name) for name, kw in cases.items()]})
 
 
 def time_xbsm(build, calls):
@@ -250,33 +239,6 @@ def profile_niirs(build, method):
 
 # ---------------------------------------------------------------- report
 
-def machine():
-    info = {"machine": platform.machine(), "processor": platform.processor() or None,
-            "cpu_count": os.cpu_count(), "python": platform.python_version(),
-            "platform": platform.platform()}
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                info["cpu"] = line.split(":", 1)[1].strip()
-                break
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemTotal"):
-                info["memory_gib"] = round(int(line.split()[1]) / 2**20, 1)
-                break
-    except OSError:
-        pass
-    return info
-
-
-def commit():
-    def git(*args):
-        proc = subprocess.run(["git", "-C", str(ROOT), *args], capture_output=True, text=True)
-        return proc.stdout.strip() if proc.returncode == 0 else None
-
-    return {"commit": git("rev-parse", "--short", "HEAD"),
-            "xbsm_modified_since_commit": bool(git("status", "--porcelain", "--", "xbsm"))}
-
-
 def fmt(row):
     return f"{row['median_ms']:7.1f} ({row['q1_ms']:.1f}-{row['q3_ms']:.1f})"
 
@@ -318,20 +280,10 @@ def print_tables(record):
 
 
 def print_profile(profiles):
-    methods = list(profiles)
-    print(f"\nprofile of one xbsm.niirs call on {PROFILE_SCENARIO} (cProfile), ms: "
-          "own code + numpy it calls directly / xarray below it")
-    print(f"{'module':22s}" + "".join(f"{m:>24s}" for m in methods))
-    modules = []
-    for p in profiles.values():
-        modules += [m for m in p["by_module"] if m not in modules]
-    for module in modules:
-        cells = []
-        for m in methods:
-            row = profiles[m]["by_module"].get(module)
-            cells.append(f"{row['own_ms']:8.1f} / {row['xarray_ms']:6.1f} ({row['share']:4.0%})"
-                         if row else "")
-        print(f"{module:22s}" + "".join(f"{c:>24s}" for c in cells))
+    methods, modules = print_by_module(
+        profiles, f"\nprofile of one xbsm.niirs call on {PROFILE_SCENARIO} (cProfile), ms: "
+        "own code + numpy it calls directly / xarray below it",
+        lambda _, row: f"{row['own_ms']:8.1f} / {row['xarray_ms']:6.1f} ({row['share']:4.0%})")
     for label, key, unit in (("xarray overhead", "xarray_overhead_ms", "ms"),
                              ("profiled total", "profiled_total_ms", "ms"),
                              ("unprofiled call", "unprofiled_call_ms", "ms"),

@@ -74,16 +74,14 @@ import itertools
 import json
 import math
 import os
-import platform
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from _provenance import commit, machine
 
 import xbsm
 
@@ -316,31 +314,6 @@ def jsonable(x):
     return x
 
 
-def git_state():
-    try:
-        head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
-                              capture_output=True, text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--", "xbsm"],
-                               capture_output=True, text=True, check=True).stdout.split("\n")
-        return {"commit": head,
-                "xbsm_files_changed_in_work_tree": [d.strip() for d in dirty if d.strip()]}
-    except (OSError, subprocess.CalledProcessError):
-        return {"commit": None}
-
-
-def machine():
-    info = {"python": sys.version.split()[0], "platform": platform.platform(),
-            "cpu_count": os.cpu_count(), "numpy": np.__version__, "xarray": xr.__version__}
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                info["cpu"] = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return info
-
-
 # --- the study --------------------------------------------------------------------------
 
 
@@ -484,7 +457,7 @@ def main():
         out_path = Path(tempfile.gettempdir()) / "xbsm_preset_error" / "preset_error.json"
     t_start = time.perf_counter()
     load_start = os.getloadavg()
-    git = git_state()  # at the start: the code this run imports
+    git = commit()  # at the start: the code this run imports
     rng = np.random.default_rng(args.seed)
 
     def elapsed():

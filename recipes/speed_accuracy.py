@@ -62,15 +62,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import statistics
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from _provenance import machine
 
 import xbsm
 from xbsm.flags import has_flag
@@ -388,20 +387,6 @@ def knob_table(method):
     """Every knob of a Method as JSON-able values (constants by their repr)."""
     return {k: (getattr(method, k) if k != "constants" else repr(method.constants))
             for k in method.knobs()}
-
-
-def machine():
-    info = {"python": sys.version.split()[0], "platform": platform.platform(),
-            "processor": platform.processor() or platform.machine(),
-            "cpu_count": os.cpu_count(), "numpy": np.__version__, "xarray": xr.__version__}
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                info["cpu"] = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return info
 
 
 def plot(result, path):
