@@ -84,7 +84,7 @@ EXPECTED_UNITS = MappingProxyType({
     "slant_range": "m", "elevation_angle": "rad", "target_elevation_angle": "rad",
     "nadir_angle": "rad", "altitude_along_path": "m", "ifov": "rad",
     "ground_sample_distance": "m", "ifov_x": "rad", "ifov_y": "rad", "gsd_x": "m", "gsd_y": "m",
-    "otf_weights": "s-1 m-1", "sensor_cutoff": "cycles/rad",
+    "otf_weights": "s-1 m-1",
     # atmosphere
     "transmission": "1", "path_thermal": RADIANCE, "surface_emission": RADIANCE,
     "solar_scatter": RADIANCE, "ground_reflected": RADIANCE,
@@ -370,7 +370,6 @@ def _cases():
         "spectral_average": lambda: spectral.spectral_average(
             aperture.circular_aperture(fx, fy, wl, 0.275), w),
         "otf_weights": lambda: system.otf_weights(_signal()["spectral_weights"]),
-        "sensor_cutoff": lambda: quadrature.sensor_cutoff(_olson()[0], _band()["wavelength"]),
         "system_components": lambda: system.system_components(
             s, sc, xr.DataArray(np.linspace(0.0, 4e5, 5), dims="frequency"),
             spectral_weights=_signal()["spectral_weights"],

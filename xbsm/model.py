@@ -17,7 +17,7 @@ from .methods import Method
 from .methods import method as resolve_method
 from .otf.system import otf_weights, system_components
 from .params import check_inputs
-from .quadrature import UNRESOLVED_RER, edge_nodes, sensor_cutoff, undersampled
+from .quadrature import UNRESOLVED_RER, edge_nodes, optics_cutoff, undersampled
 
 
 def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets="giqe"):
@@ -52,15 +52,18 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
     check_inputs(sensor, scenario)
     if targets not in ("giqe", "scenario"):
         raise ValueError(f"targets must be 'giqe' or 'scenario'; got {targets!r}")
-    return _snr(sensor, scenario, resolve_method(method), targets)
+    return _snr(sensor, scenario, resolve_method(method), targets)[0]
 
 
-def _snr(sensor: xr.Dataset, scenario: xr.Dataset, m: Method, targets: str) -> xr.Dataset:
-    """The SNR chain on validated inputs: atmosphere, radiometry, noise."""
+def _snr(sensor: xr.Dataset, scenario: xr.Dataset, m: Method, targets: str):
+    """The SNR chain on validated inputs, and the optics cutoff over the same band curves."""
     atm = _band_atmosphere(sensor, scenario, m)
     target, background = radiometry.aperture_radiances(
         atm, scenario, targets, sensor["wavelength_min"], m.constants)
-    signal = radiometry.signal_terms(sensor, atm, target, background, m.constants)
+    band = radiometry.sensor_band_terms(sensor, atm["wavelength"], m.constants)
+    signal = radiometry.signal_terms(sensor, atm, target, background, m.constants, band=band)
+    cutoff = optics_cutoff(sensor["aperture_diameter"], atm["wavelength"],
+                           band["quantum_efficiency"], band["optics_transmission"])
     noise_ = noise.noise_terms(signal, sensor)
     brighter = np.maximum(signal["target_photoelectrons"], signal["background_photoelectrons"])
     flags = fl.set_flag(atm["flags"], "well_fill_limited", signal["well_fill_scale"] < 1.0)
@@ -75,7 +78,7 @@ def _snr(sensor: xr.Dataset, scenario: xr.Dataset, m: Method, targets: str) -> x
         **{name: noise_[name] for name in noise_.data_vars if name not in ("snr", "snr_frame")},
         "spectral_weights": signal["spectral_weights"],
         "flags": flags,
-    }, m, targets=targets)
+    }, m, targets=targets), cutoff
 
 
 def _band_atmosphere(sensor: xr.Dataset, scenario: xr.Dataset, m: Method) -> xr.Dataset:
@@ -127,11 +130,11 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
     check_inputs(sensor, scenario)
     m = resolve_method(method)
     calibration = metrics.giqe_calibrations(calibration)
-    r = _snr(sensor, scenario, m, "giqe")
+    r, cutoff = _snr(sensor, scenario, m, "giqe")
     view = geometry.viewing_geometry(
         scenario["ground_range"], scenario["altitude"], sensor["pixel_pitch_x"],
         sensor["pixel_pitch_y"], sensor["focal_length"], elevation=m.elevation, form=m.geometry)
-    edges = _edge_terms(sensor, scenario, r, view, m)
+    edges = _edge_terms(sensor, scenario, r, cutoff, view, m)
     ifov = xr.concat([view["ifov_x"], view["ifov_y"]], dim="orientation").assign_coords(
         orientation=["x", "y"])
     giqe = metrics.giqe_by_version(
@@ -155,11 +158,10 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
     }, m)
 
 
-def _edge_terms(s: xr.Dataset, sc: xr.Dataset, r: xr.Dataset, view: xr.Dataset,
-                m: Method) -> xr.Dataset:
+def _edge_terms(s: xr.Dataset, sc: xr.Dataset, r: xr.Dataset, cutoff: xr.DataArray,
+                view: xr.Dataset, m: Method) -> xr.Dataset:
     """RER and EHO of the system OTF on the x and y slices, at the method's quadrature nodes."""
     weights = r["spectral_weights"]
-    cutoff = sensor_cutoff(s, weights["wavelength"])
     ifov_x, ifov_y = view["ifov_x"], view["ifov_y"]
     nodes, quad_weights = edge_nodes(cutoff, ifov_x, ifov_y, **m.edge_quadrature_knobs())
     otf = system_components(s, sc, nodes, spectral_weights=otf_weights(weights),
@@ -226,11 +228,10 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method=
     """
     check_inputs(sensor, scenario)
     m = resolve_method(method)
-    r = _snr(sensor, scenario, m, "giqe")
+    r, cutoff = _snr(sensor, scenario, m, "giqe")
     weights = r["spectral_weights"]
     if frequency is None:
-        cutoff = float(sensor_cutoff(sensor, weights["wavelength"]).max())
-        frequency = np.linspace(0.0, cutoff, 201)
+        frequency = np.linspace(0.0, float(cutoff.max()), 201)
     frequency = params.frequencies("frequency", params.labelled("frequency", frequency,
                                                                 "frequency"))
     if "frequency" in frequency.coords:

@@ -33,12 +33,10 @@ import numpy as np
 import xarray as xr
 
 from ._metadata import named
-from .radiometry import resample_spectral
 
 __all__ = [
     "EDGE_RULES",
     "UNRESOLVED_RER",
-    "sensor_cutoff",
     "cutoff_wavelength",
     "optics_cutoff",
     "undersampled",
@@ -479,26 +477,6 @@ def optics_cutoff(aperture_diameter, wavelength: xr.DataArray, qe, transmission)
     """
     out = aperture_diameter / cutoff_wavelength(wavelength, qe, transmission)
     return named(out, "cycles/rad", "optics cutoff frequency D/lambda_min")
-
-
-def sensor_cutoff(sensor, wavelength: xr.DataArray) -> xr.DataArray:
-    """The optics cutoff over the band from a sensor dataset's QE and transmission curves.
-
-    Parameters
-    ----------
-    sensor : xr.Dataset
-        From :func:`xbsm.sensor`.
-    wavelength : xr.DataArray
-        Band wavelengths. [m]
-
-    Returns
-    -------
-    xr.DataArray
-        :func:`optics_cutoff` of the sensor's curves resampled on ``wavelength``. [cycles/rad]
-    """
-    curves = [resample_spectral(sensor[name], wavelength, name)
-              for name in ("quantum_efficiency", "optics_transmission")]
-    return optics_cutoff(sensor["aperture_diameter"], wavelength, *curves)
 
 
 #: Below this RER (geometric mean) the edge-response quadrature is not converged: over 240

@@ -523,7 +523,7 @@ def detector_irradiance(radiance, band: xr.Dataset, sensor: xr.Dataset):
 
 
 def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
-                 background_radiance, constants=CODATA) -> xr.Dataset:
+                 background_radiance, constants=CODATA, *, band=None) -> xr.Dataset:
     """Photoelectrons of target and background in one integration, by name (Sec. 2.2).
 
     Parameters
@@ -536,6 +536,8 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
         Aperture spectral radiances, from :func:`aperture_radiances`. [W m-2 sr-1 m-1]
     constants : Constants
         Physical constants.
+    band : xr.Dataset, optional
+        :func:`sensor_band_terms` on the atmosphere's wavelengths, if the caller has it.
 
     Returns
     -------
@@ -549,7 +551,8 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
         irradiance) and ``sensor_rate`` [s-1].
     """
     s, k = sensor, constants
-    band = sensor_band_terms(s, atmosphere["wavelength"], k)
+    if band is None:
+        band = sensor_band_terms(s, atmosphere["wavelength"], k)
     other = band["sensor_irradiance"]
 
     def rate(irradiance):
