@@ -304,8 +304,12 @@ def _suggesting(func):
     return wrapper
 
 
-def _check_shared_dims(values: dict[str, xr.DataArray], kind: str) -> None:
-    """Parameters swept on one dimension must agree on its length and coordinates."""
+def _check_shared_dims(values, kind: str) -> None:
+    """Parameters swept on one dimension must agree on its length and coordinates.
+
+    ``values`` maps parameter names to DataArrays; ``kind`` names them in the error
+    ("sensor", or "sensor and scenario" for the two datasets of a model call).
+    """
     seen = {}
     for name, value in values.items():
         for dim in value.dims:
@@ -314,12 +318,16 @@ def _check_shared_dims(values: dict[str, xr.DataArray], kind: str) -> None:
                 seen[dim] = (name, value.sizes[dim], index)
                 continue
             first, size, first_index = seen[dim]
-            if size != value.sizes[dim] or (index is not None and first_index is not None
-                                            and not index.equals(first_index)):
+            if size != value.sizes[dim]:
                 raise ValueError(
                     f"{kind} parameters {first} and {name} both sweep dimension {dim!r} but "
-                    f"with different lengths or coordinates ({size} and {value.sizes[dim]} "
-                    "values); one dimension is one sweep: give them the same values")
+                    f"with {size} and {value.sizes[dim]} values; one dimension is one sweep: "
+                    "give them one length, or different dimension names for a product")
+            if index is not None and first_index is not None and not index.equals(first_index):
+                raise ValueError(
+                    f"{kind} parameters {first} and {name} both sweep dimension {dim!r} with "
+                    "different coordinate values; give them the same coordinates or "
+                    "different dimension names")
 
 
 def _finish(values: dict[str, xr.DataArray], kind: str) -> xr.Dataset:
@@ -436,9 +444,10 @@ def sensor(
     """
     given = dict(locals())
     # validate what the defaults are derived from first, so an error names the input
-    for name in ("pixel_pitch_x", "pixel_pitch_y", "detector_width_x", "aperture_diameter"):
-        if given[name] is not None:
-            given[name] = _validated(name, given[name], SENSOR_SPECS[name])
+    checked = [name for name in ("pixel_pitch_x", "pixel_pitch_y", "detector_width_x",
+                                 "aperture_diameter") if given[name] is not None]
+    for name in checked:
+        given[name] = _validated(name, given[name], SENSOR_SPECS[name])
     if pixel_pitch_y is None:
         given["pixel_pitch_y"] = given["pixel_pitch_x"]
     if detector_width_x is None:
@@ -456,6 +465,8 @@ def sensor(
     for name, spec in SENSOR_SPECS.items():
         if name in SPECTRAL:
             values[name] = _spectral(name, given[name], spec)
+        elif name in checked:
+            values[name] = given[name]
         else:
             values[name] = _validated(name, given[name], spec)
     for name in ("wavelength_min", "wavelength_max"):
@@ -645,14 +656,4 @@ def check_inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> None:
                                                                                "kernel_x"}:
         raise ValueError("the sensor's filter_kernel must be a 2-D array on "
                          "('kernel_y', 'kernel_x'); make it with xbsm.sensor(filter_kernel=...)")
-    for dim in set(sensor.dims) & set(scenario.dims):
-        if sensor.sizes[dim] != scenario.sizes[dim]:
-            raise ValueError(
-                f"sensor and scenario both sweep dimension {dim!r} but with "
-                f"{sensor.sizes[dim]} and {scenario.sizes[dim]} values; give them one length "
-                "(one sweep) or different names (a product of two sweeps)")
-        if dim in sensor.indexes and dim in scenario.indexes and not (
-                sensor.indexes[dim].equals(scenario.indexes[dim])):
-            raise ValueError(
-                f"sensor and scenario both sweep dimension {dim!r} with different coordinate "
-                "values; give them the same coordinates or different dimension names")
+    _check_shared_dims({**sensor.data_vars, **scenario.data_vars}, "sensor and scenario")
