@@ -39,7 +39,7 @@ import xarray as xr
 
 from ._metadata import named
 from .flags import flag, flag_attrs
-from .units import si_factor
+from .units import in_units
 
 __all__ = [
     "COMPONENTS",
@@ -359,14 +359,7 @@ def _as_input(value, name):
     if value.dtype.kind not in "iuf":
         raise ValueError(f"{name} must be a real number or an xr.DataArray of real numbers; "
                          f"got dtype {value.dtype}")
-    out = value.astype(np.float64)
-    given, expected = value.attrs.get("units"), _INPUT_UNITS[name]
-    if given is not None and str(given).strip() not in ("", expected):
-        factor = si_factor(str(given).strip(), expected)
-        if factor is None:
-            raise ValueError(f"{name} has units {given!r}; expected {expected!r} or a multiple")
-        out = out * factor
-    return out
+    return in_units(name, value.astype(np.float64), _INPUT_UNITS[name])
 
 
 def _wavelength_window(wavelength, bounds):

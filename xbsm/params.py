@@ -203,25 +203,12 @@ def _as_float64(name: str, value, spec: Spec):
     return np.asarray(value, dtype=np.float64)
 
 
-def _in_si(name: str, value: xr.DataArray, spec: Spec) -> xr.DataArray:
-    """Convert an input whose ``units`` attribute names a multiple of the SI unit."""
-    given = value.attrs.get("units")
-    if given is None or str(given).strip() in (spec.units, ""):
-        return value
-    factor = units.si_factor(str(given).strip(), spec.units)
-    if factor is None:
-        raise ValueError(
-            f"{name} has units {given!r}; xbsm expects {spec.units!r} "
-            f"(or one of {', '.join(units.accepted(spec.units))}), converted on input")
-    return value * factor
-
-
 def _validated(name: str, value, spec: Spec, allowed_dims=()) -> xr.DataArray:
     """Return ``value`` as a float64 DataArray in SI with attrs, raising if out of range."""
     if isinstance(value, xr.Variable):
         value = xr.DataArray(value)
     if isinstance(value, xr.DataArray):
-        out = _in_si(name, _as_float64(name, value, spec), spec).copy(deep=False)
+        out = units.in_units(name, _as_float64(name, value, spec), spec.units).copy(deep=False)
         if out.size == 0:
             raise ValueError(f"{name} is an empty sweep (dims {out.dims}); give at least one value")
     else:

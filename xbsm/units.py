@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from types import MappingProxyType
 
-__all__ = ["accepted", "si_factor"]
+__all__ = ["accepted", "in_units", "si_factor"]
 
 #: Decimal prefixes accepted on the base units m, s and rad.
 _PREFIXES = MappingProxyType(
@@ -79,3 +79,23 @@ def accepted(expected: str) -> list[str]:
         out = [prefix + base for prefix in ("k", "", "m", "u", "n") if prefix + base != expected]
         return out + (["deg"] if base == "rad" else [])
     return [unit for unit, (b, _) in _MULTIPLES.items() if b == base][:2] or [expected]
+
+
+def in_units(name: str, value, expected: str):
+    """``value`` (a DataArray) in ``expected`` units, by its ``units`` attribute if it has one.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, the unit given and the unit expected, when the two are not
+        multiples of one another.
+    """
+    given = value.attrs.get("units")
+    if given is None or str(given).strip() in (expected, ""):
+        return value
+    factor = si_factor(str(given).strip(), expected)
+    if factor is None:
+        raise ValueError(
+            f"{name} has units {given!r}; xbsm expects {expected!r} "
+            f"(or one of {', '.join(accepted(expected))}), converted on input")
+    return value * factor
