@@ -14,7 +14,7 @@ from xbsm import flags, pybsm_compat
 from xbsm.methods import Method
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
-PAGES = ("index", "guide", "migration", "quirks", "flags", "api", "validation")
+PAGES = ("index", "guide", "migration", "quirks", "flags", "api", "validation", "measure")
 
 # Modules whose public functions docs/api.md must list, one by one.
 API_MODULES = (
@@ -26,6 +26,7 @@ API_MODULES = (
     "xbsm.otf.aperture", "xbsm.otf.defocus", "xbsm.otf.detector", "xbsm.otf.filters",
     "xbsm.otf.motion", "xbsm.otf.psf", "xbsm.otf.spectral", "xbsm.otf.system",
     "xbsm.otf.turbulence", "xbsm.otf.user", "xbsm.otf.wavefront",
+    "xbsm.measure.slanted_edge", "xbsm.measure.flat_region",
 )
 
 

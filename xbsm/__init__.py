@@ -9,10 +9,13 @@ Public entry points::
     n = xbsm.niirs(s, sc)
 """
 
+__version__ = "0.1.0"  # first: submodules read it while the package initialises
+
 from . import (
                examples,
                flags,
                geometry,
+               measure,
                metrics,
                noise,
                otf,
@@ -31,6 +34,7 @@ __all__ = [
     "examples",
     "flags",
     "geometry",
+    "measure",
     "metrics",
     "noise",
     "otf",
@@ -47,4 +51,3 @@ __all__ = [
     "snr",
     "system_otf",
 ]
-__version__ = "0.1.0"
