@@ -14,7 +14,8 @@ from xbsm import flags, pybsm_compat
 from xbsm.methods import Method
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
-PAGES = ("index", "guide", "migration", "quirks", "flags", "api", "validation", "measure")
+PAGES = ("index", "guide", "migration", "quirks", "flags", "api", "validation", "study",
+         "example1", "measure")
 
 # Modules whose public functions docs/api.md must list, one by one.
 API_MODULES = (
@@ -27,6 +28,7 @@ API_MODULES = (
     "xbsm.otf.motion", "xbsm.otf.psf", "xbsm.otf.spectral", "xbsm.otf.system",
     "xbsm.otf.turbulence", "xbsm.otf.user", "xbsm.otf.wavefront",
     "xbsm.measure.slanted_edge", "xbsm.measure.flat_region",
+    "xbsm.study.spec", "xbsm.study.build", "xbsm.study.store", "xbsm.study.goals",
 )
 
 

@@ -1,147 +1,130 @@
-"""The ``xbsm`` command.
+"""The ``xbsm`` command: ``run``, ``plot``, ``info`` (and ``olson``, an alias of ``run``).
 
-``xbsm olson --out DIR`` runs the paper's first worked example (Sec. 3) on
-the built-in atmosphere: the Olson camera (Table 2) at 9 km over every
-database ground range, both visibilities, red and near-infrared bands. It
-writes one NetCDF file per band as soon as that band is done (a long run
-never loses finished work) and the paper's Figures 2-5.
+``xbsm run [STUDY.toml] [-o OUT.nc]`` runs a study file (by default the
+paper's first worked example, shipped with the package) lazily in chunks,
+writes the NetCDF safely (an interrupted run resumes; the output appears only
+when complete) and draws the standard figures. ``xbsm plot OUT.nc`` draws the
+figures of any result file; ``xbsm info`` prints the atmosphere database's
+coverage, the method presets and the versions.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from importlib import resources
 from pathlib import Path
 
 import xarray as xr
 
-from . import examples, model, plot
-from .flags import flag
+from . import __version__, plot, study
 from .methods import PRESETS
+from .study.store import check_output
 
-WELL_FILL = flag("well_fill_limited")  # informational, not a validity problem
-
-
-def _encode_for_netcdf(ds: xr.Dataset) -> xr.Dataset:
-    """Make attrs NetCDF-safe (no None, bools as ints)."""
-    ds = ds.copy()
-    for var in list(ds.variables.values()) + [ds]:
-        for key, value in list(var.attrs.items()):
-            if value is None:
-                del var.attrs[key]
-            elif isinstance(value, bool):
-                var.attrs[key] = int(value)
-    return ds
+#: The study ``xbsm run`` runs without a study file: the paper's Example 1 (Sec. 3).
+DEFAULT_STUDY = "example1.toml"
 
 
-def compute_olson(method: str = "accurate") -> dict[str, xr.Dataset]:
-    """NIIRS, SNR and their breakdowns of the Olson camera, by band (paper Sec. 3)."""
-    results = {}
-    for band in examples.OLSON_BANDS:
-        ds = model.niirs(examples.olson_sensor(band), examples.olson_scenario(), method)
-        ds.attrs.update(
-            title=f"xbsm: NIIRS and SNR of the Olson camera, {band} band",
-            source="xbsm olson (LeMaster & Eismann 2017, Sec. 3)", method=method,
-            Conventions="CF-1.8",
-        )
-        results[band] = ds
-    return results
+def default_study_path() -> Path:
+    """Path of the study file shipped with the package (paper Example 1)."""
+    return Path(str(resources.files("xbsm") / "data" / DEFAULT_STUDY))
 
 
-def write_olson(results: dict[str, xr.Dataset], out: Path) -> None:
-    """One NetCDF file per band in ``out``."""
-    out.mkdir(parents=True, exist_ok=True)
-    for band, ds in results.items():
-        path = out / f"olson_{band}.nc"
-        _encode_for_netcdf(ds).to_netcdf(path)
+def _figure_dir(out: Path) -> Path:
+    return out.with_name(out.stem + "_figures")
+
+
+def run(study_file: Path | None, out: Path | None, *, overwrite=False, scheduler=None,
+        workers=None, figures=True, progress=True) -> Path:
+    """Load, compute, write and draw one study; return the NetCDF path."""
+    spec = study.load(study_file or default_study_path())
+    out = out or Path(spec.output or (Path(study_file or DEFAULT_STUDY).stem + ".nc"))
+    check_output(out, overwrite)  # before any work
+    result = study.run(spec)
+    study.write(result, out, overwrite=overwrite, scheduler=scheduler or spec.scheduler,
+                workers=workers or spec.workers, progress=progress)
+    print(f"wrote {out}")
+    if figures:
+        draw(out, _figure_dir(out))
+    return out
+
+
+def draw(result_file: Path, directory: Path) -> list[Path]:
+    """The standard figures of a result file, written into ``directory``."""
+    with xr.open_dataset(result_file) as ds:
+        try:
+            paths = plot.standard_figures(ds.load(), directory)
+        except ValueError as err:  # a result these figures cannot lay out
+            raise study.StudyError(f"no standard figures for {result_file}: {err}") from None
+    for path in paths:
         print(f"wrote {path}")
+    return paths
 
 
-def draw_olson(results: dict[str, xr.Dataset], out: Path, method: str = "accurate") -> None:
-    """The paper's Figures 2-5 as PNG files in ``out``."""
-    import matplotlib
+def info() -> None:
+    """Print the atmosphere coverage, the method presets and the versions."""
+    from .atmosphere import database_path, open_atmosphere
+    from .study.store import _versions
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    def panels(name, draw, height=4.0):
-        fig, axes = plt.subplots(1, 2, figsize=(11, height), sharey=True)
-        for ax, key in zip(axes, results, strict=False):
-            draw(ax, key)
-        fig.tight_layout()
-        fig.savefig(out / name, dpi=110)
-
-    def niirs_panel(ax, band):
-        plot.against_range(results[band].niirs.sel(giqe=3), ax=ax, hue="visibility")
-        ax.set_ylim(0, 10)  # the rating scale; flagged values far below it are off the chart
-        ax.set_title(f"{band} band: NIIRS (GIQE 3, paper Eq. 4)")
-
-    def snr_panel(ax, band):
-        plot.against_range(results[band].snr, ax=ax, hue="visibility")
-        ax.set_yscale("log")
-        ax.set_ylim(1e-2, None)
-        ax.set_title(f"{band} band: contrast SNR")
-
-    def noise_panel(ax, band):
-        plot.noise_breakdown(results[band].sel(ground_range=20000.0, visibility=5.0), ax=ax)
-        ax.set_xlabel(f"{band} band, 20 km ground range, 5 km visibility")
-
-    panels("figure2_niirs.png", niirs_panel)
-    panels("figure3_snr.png", snr_panel)
-    panels("figure4_noise.png", noise_panel, height=4.5)
-
-    sensor = examples.olson_sensor("red")
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
-    for ax, ground_range in zip(axes, (0.0, 100e3), strict=False):
-        scenario = examples.olson_scenario(ground_range=ground_range, visibility=23.0)
-        otf = model.system_otf(sensor, scenario, method=method)
-        nyquist = 0.5 / float(sensor.pixel_pitch_x / sensor.focal_length)
-        plot.mtf_breakdown(otf, float(sensor.focal_length), nyquist=nyquist, ax=ax)
-        ax.set_title(f"red band, {ground_range / 1e3:g} km ground range, 23 km visibility")
-    fig.tight_layout()
-    fig.savefig(out / "figure5_mtf.png", dpi=110)
-    plt.close("all")
+    atm = open_atmosphere()
+    print(f"xbsm {__version__} ({_versions()})")
+    print(f"atmosphere database: {database_path()}")
+    for dim, units, scale in (("altitude", "km", 1e-3), ("ground_range", "km", 1e-3),
+                              ("visibility", "km", 1.0), ("wavelength", "um", 1e6)):
+        values = atm[dim].values * scale
+        print(f"  {dim}: {len(values)} values from {values.min():g} to {values.max():g} {units}")
+    print("method presets: " + ", ".join(sorted(PRESETS)) + " (default accurate)")
+    print(f"default study (xbsm run): {default_study_path()}")
 
 
-def summarize_olson(results: dict[str, xr.Dataset]) -> None:
-    """Print NIIRS and SNR at three ranges, marking values outside the GIQE calibration."""
-    print("NIIRS (GIQE 3 / 4 / 5) at 9 km altitude (* outside the GIQE calibration ranges):")
-    for band, ds in results.items():
-        for vis in (23.0, 5.0):
-            for gr in (0.0, 20e3, 100e3):
-                point = ds.sel(visibility=vis, ground_range=gr)
-                marks = ["*" if int(f) & ~WELL_FILL else " " for f in point.flags.values]
-                print(f"  {band:3s} vis {vis:4.0f} km  range {gr / 1e3:5.0f} km: "
-                      + " / ".join(f"{x:9.2f}{m}" for x, m in zip(point.niirs.values, marks,
-                                                                   strict=True))
-                      + f"   SNR {float(point.snr):8.2f}")
-
-
-def run_olson(out: Path, method: str = "accurate") -> dict[str, xr.Dataset]:
-    """Compute, write and draw the Olson example; return the per-band datasets."""
-    results = compute_olson(method)
-    write_olson(results, out)
-    draw_olson(results, out, method)
-    summarize_olson(results)
-    print(f"figures in {out}")
-    return results
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="xbsm", description="xbsm imaging-system model")
+    sub = parser.add_subparsers(dest="command", required=True)
+    run_ = sub.add_parser("run", help="run a study file (default: the paper's Example 1)")
+    run_.add_argument("study", nargs="?", type=Path, help="study file (TOML); see docs/study.md")
+    run_.add_argument("-o", "--out", type=Path, help="output NetCDF file")
+    run_.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    run_.add_argument("--scheduler", help="threads, synchronous, local-cluster or an address "
+                      "such as tcp://host:8786 (default: the study's, else threads)")
+    run_.add_argument("--workers", type=int, help="threads or cluster workers")
+    run_.add_argument("--no-figures", action="store_true", help="write only the NetCDF file")
+    plot_ = sub.add_parser("plot", help="the standard figures of a result file")
+    plot_.add_argument("result", type=Path, help="a NetCDF file written by xbsm run")
+    plot_.add_argument("--out", type=Path, help="directory (default: next to the file)")
+    sub.add_parser("info", help="atmosphere coverage, method presets, versions")
+    olson = sub.add_parser("olson", help="alias of `xbsm run` into a directory")
+    olson.add_argument("--out", type=Path, default=Path("olson"), help="output directory")
+    return parser
 
 
 def main(argv=None) -> int:
     """Entry point of the ``xbsm`` command."""
-    parser = argparse.ArgumentParser(prog="xbsm", description="xbsm imaging-system model")
-    sub = parser.add_subparsers(dest="command", required=True)
-    olson = sub.add_parser("olson", help="the paper's worked example (Olson camera, Sec. 3)")
-    olson.add_argument("--out", type=Path, default=Path("olson"), help="output directory")
-    olson.add_argument("--method", choices=sorted(PRESETS), default="accurate")
+    parser = _parser()
     args = parser.parse_args(argv)
-    if args.command == "olson":
-        if args.out.exists() and not args.out.is_dir():
-            parser.error(f"--out {args.out} exists and is not a directory")
-        try:
-            run_olson(args.out, args.method)
-        except OSError as err:
-            parser.error(f"cannot write to --out {args.out}: {err.strerror or err}")
+    try:
+        if args.command == "run":
+            if args.workers is not None and args.workers < 1:
+                parser.error(f"--workers must be >= 1; got {args.workers}")
+            run(args.study, args.out, overwrite=args.overwrite, scheduler=args.scheduler,
+                workers=args.workers, figures=not args.no_figures)
+        elif args.command == "olson":
+            if args.out.exists() and not args.out.is_dir():
+                parser.error(f"--out {args.out} exists and is not a directory")
+            args.out.mkdir(parents=True, exist_ok=True)
+            run(None, args.out / "example1.nc", overwrite=True)
+        elif args.command == "plot":
+            if not args.result.is_file():
+                parser.error(f"no result file {args.result}")
+            draw(args.result, args.out or _figure_dir(args.result))
+        else:
+            info()
+    except study.StudyError as err:
+        parser.exit(2, f"xbsm {args.command}: {err}\n")
+    except OSError as err:
+        parser.exit(2, f"xbsm {args.command}: {err.strerror or err}: {err.filename or ''}\n")
+    except KeyboardInterrupt:
+        parser.exit(130, f"xbsm {args.command}: interrupted; finished chunks are kept, run the "
+                    "same command again to resume (no output file was written)\n")
     return 0
 
 

@@ -31,6 +31,36 @@ DATABASE_GROUND_RANGES = np.concatenate([
 DATABASE_GROUND_RANGES.flags.writeable = False  # a read-only table
 
 
+def olson_sensor_parameters(band: str = "nir") -> dict:
+    """The keyword arguments of :func:`xbsm.sensor` that make the Olson camera.
+
+    The plain parameters behind :func:`olson_sensor` (SI units), for callers
+    that combine them with their own, such as study files.
+
+    Parameters
+    ----------
+    band : {"red", "nir"}
+        500-660 nm (QE 0.80) or 550-850 nm (QE 0.71).
+
+    Returns
+    -------
+    dict
+    """
+    if band not in OLSON_BANDS:
+        raise ValueError(f"band must be one of {sorted(OLSON_BANDS)}; got {band!r}")
+    lo, hi, qe = OLSON_BANDS[band]
+    pitch, focal = 8.0e-6, 4.0
+    return dict(
+        aperture_diameter=0.275, focal_length=focal, pixel_pitch_x=pitch,
+        wavelength_min=lo, wavelength_max=hi, obscuration_ratio=0.4,
+        optics_transmission=0.5, quantum_efficiency=qe, integration_time=0.03,
+        read_noise=25.0, max_well=96000.0, bit_depth=11.9, max_well_fill=0.6,
+        jitter_x=0.25 * pitch / focal, jitter_y=0.25 * pitch / focal,
+        drift_rate_x=100e-6, drift_rate_y=100e-6,
+        dark_current=float(dark_current_from_density(1e-5, pitch, pitch)),
+    )
+
+
 def olson_sensor(band: str = "nir", **overrides) -> xr.Dataset:
     """The paper's Olson camera (Table 2) in the red or near-infrared band.
 
@@ -52,19 +82,7 @@ def olson_sensor(band: str = "nir", **overrides) -> xr.Dataset:
     urad/s drift, 60% well-fill limit, 30 ms maximum integration time. The
     paper's silicon-CCD QE curve is not tabulated; the band averages are used.
     """
-    if band not in OLSON_BANDS:
-        raise ValueError(f"band must be one of {sorted(OLSON_BANDS)}; got {band!r}")
-    lo, hi, qe = OLSON_BANDS[band]
-    pitch, focal = 8.0e-6, 4.0
-    params = dict(
-        aperture_diameter=0.275, focal_length=focal, pixel_pitch_x=pitch,
-        wavelength_min=lo, wavelength_max=hi, obscuration_ratio=0.4,
-        optics_transmission=0.5, quantum_efficiency=qe, integration_time=0.03,
-        read_noise=25.0, max_well=96000.0, bit_depth=11.9, max_well_fill=0.6,
-        jitter_x=0.25 * pitch / focal, jitter_y=0.25 * pitch / focal,
-        drift_rate_x=100e-6, drift_rate_y=100e-6,
-        dark_current=float(dark_current_from_density(1e-5, pitch, pitch)),
-    )
+    params = olson_sensor_parameters(band)
     params.update(overrides)
     out = sensor(**params)
     out.attrs["name"] = f"Olson camera, {band} band (LeMaster & Eismann 2017, Table 2)"

@@ -1,0 +1,214 @@
+"""Studies: lazy build, safe resumable writing, range performance (xbsm.study)."""
+
+import dask
+import numpy as np
+import pytest
+import xarray as xr
+from scipy.stats import norm
+
+import xbsm
+from xbsm import study
+from xbsm.examples import olson_scenario, olson_sensor
+from xbsm.study import store
+
+TINY = """
+title = "tiny"
+[sensor]
+preset = "olson"
+band = "nir"
+[scenario]
+altitude = 9000.0
+platform_speed = 100.0
+[sweep]
+ground_range = [0.0, 20000.0, 60000.0]
+visibility = [23.0, 5.0]
+[run]
+chunks = { ground_range = 1 }
+"""
+
+MILLION = """
+[sensor]
+preset = "olson"
+[scenario]
+platform_speed = 100.0
+[sweep]
+ground_range = { start = 0.0, stop = 100e3, num = 100 }
+altitude = { start = 3000.0, stop = 15000.0, num = 10 }
+focal_length = { start = 2.0, stop = 6.0, num = 10 }
+visibility = [23.0, 5.0]
+drift_rate_x = { start = 0.0, stop = 500e-6, num = 50 }
+"""
+
+
+def _raise_on_compute(*args, **kwargs):
+    raise AssertionError("something was computed")
+
+
+@pytest.fixture(scope="module")
+def tiny():
+    return study.parse(TINY, "tiny.toml")
+
+
+def test_a_million_scenario_study_builds_without_computing():
+    spec = study.parse(MILLION, "million.toml")
+    assert spec.scenarios == 10**6
+    with dask.config.set(scheduler=_raise_on_compute):
+        result = study.run(spec)
+    assert result.niirs.shape == (100, 10, 10, 2, 50, 3)
+    assert result.niirs.data.npartitions > 1
+    assert set(result.attrs) >= {"xbsm_study", "xbsm_method", "xbsm_knob_edge_rule"}
+
+
+def test_study_equals_the_direct_model_call(tiny, tmp_path):
+    # the same numbers from xbsm.niirs called directly on the same inputs
+    direct = xbsm.niirs(olson_sensor("nir"), olson_scenario(
+        ground_range=xr.DataArray([0.0, 20e3, 60e3], dims="ground_range"),
+        visibility=xr.DataArray([23.0, 5.0], dims="visibility")))
+    lazy = study.run(tiny)
+    xr.testing.assert_equal(lazy.niirs.compute().transpose(*direct.niirs.dims), direct.niirs)
+    path = study.write(lazy, tmp_path / "tiny.nc")
+    with xr.open_dataset(path) as written:
+        xr.testing.assert_equal(written.niirs.transpose(*direct.niirs.dims), direct.niirs)
+        assert written.attrs["xbsm_atmosphere_sha256"] == store.atmosphere_checksum()
+        assert "numpy" in written.attrs["xbsm_dependencies"]
+    assert not list(tmp_path.glob("*.parts")) and not list(tmp_path.glob("*.partial"))
+
+
+def test_rerun_computes_only_the_missing_chunks(tiny, tmp_path, monkeypatch):
+    result = study.run(tiny)
+    path = tmp_path / "out.nc"
+    saved = []
+    real = store._save_block
+
+    def save_two_then_stop(block, file):
+        if len(saved) == 2:
+            raise KeyboardInterrupt  # as if Ctrl-C arrived after two chunks
+        saved.append(file.name)
+        real(block, file)
+
+    monkeypatch.setattr(store, "_save_block", save_two_then_stop)
+    with pytest.raises(KeyboardInterrupt), dask.config.set(scheduler="synchronous"):
+        study.write(result, path, scheduler="synchronous")
+    assert not path.exists() and len(list((tmp_path / "out.nc.parts").glob("*.npz"))) == 2
+    resumed = []
+    monkeypatch.setattr(store, "_save_block", lambda b, f: (resumed.append(f.name), real(b, f)))
+    study.write(study.run(tiny), path, scheduler="synchronous")
+    assert len(resumed) == 1 and resumed[0] not in saved  # 3 chunks: only the third computed
+    with xr.open_dataset(path) as written:
+        xr.testing.assert_equal(written.niirs, result.niirs.compute())
+
+
+def test_an_interrupted_finish_leaves_no_output(tiny, tmp_path, monkeypatch):
+    def interrupted(self, *args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", interrupted)
+    path = tmp_path / "out.nc"
+    with pytest.raises(KeyboardInterrupt):
+        study.write(study.run(tiny), path, scheduler="synchronous")
+    assert not path.exists() and not (tmp_path / "out.nc.partial").exists()
+    assert len(list((tmp_path / "out.nc.parts").glob("*.npz"))) == 3  # work kept
+
+
+def test_parts_of_another_study_are_discarded(tiny, tmp_path):
+    path = tmp_path / "out.nc"
+    parts = tmp_path / "out.nc.parts"
+    parts.mkdir()
+    (parts / "study.json").write_text('{"fingerprint": "another study"}')
+    (parts / "block-0-0.npz").write_bytes(b"stale")
+    study.write(study.run(tiny), path, scheduler="synchronous")
+    with xr.open_dataset(path) as written:
+        assert np.isfinite(written.niirs).all()
+
+
+def test_existing_output_needs_overwrite(tiny, tmp_path):
+    path = tmp_path / "out.nc"
+    path.write_text("precious")
+    with pytest.raises(study.StudyError, match="--overwrite"):
+        study.write(study.run(tiny), path)
+    assert path.read_text() == "precious"
+
+
+def test_chunks_follow_the_study(tiny):
+    assert study.chunk_sizes(tiny) == {"ground_range": 1, "visibility": 2}
+    spec = study.parse(MILLION.replace("[sweep]", "[run]\nchunk_scenarios = 1000\n[sweep]"))
+    chunks = study.chunk_sizes(spec)
+    assert np.prod(list(chunks.values())) <= 1000
+    assert study.run(spec).niirs.chunks[:5] == tuple(
+        tuple(min(c, n - i) for i in range(0, n, c))
+        for c, n in zip(chunks.values(), spec.sizes.values(), strict=True))
+
+
+def test_distributed_local_cluster(tiny, tmp_path):
+    pytest.importorskip("distributed")
+    path = study.write(study.run(tiny), tmp_path / "out.nc", scheduler="local-cluster",
+                       workers=1)
+    with xr.open_dataset(path) as written:
+        assert written.niirs.shape == (3, 2, 3)
+
+
+# --- range performance ------------------------------------------------------------------
+
+
+def _line(values, coords, dim="ground_range"):
+    return xr.DataArray(np.asarray(values, dtype=float), dims=dim,
+                        coords={dim: (dim, coords, {"units": "m"})})
+
+
+def test_max_range_interpolates_the_crossing():
+    # NIIRS 8, 7, 5, 3 at 0, 10, 20, 30 km: 6 is crossed halfway from 10 to 20 km (linear)
+    niirs = _line([8, 7, 5, 3], [0.0, 10e3, 20e3, 30e3])
+    out = study.max_range(niirs, 6.0)
+    assert float(out.max_range) == pytest.approx(15e3, rel=1e-12)
+    assert int(out.goal_flags) == 0
+    assert out.max_range.attrs["units"] == "m"
+
+
+def test_max_range_bounds_and_misses_are_flagged():
+    niirs = _line([8, 7, 5, 3], [0.0, 10e3, 20e3, 30e3])
+    never = study.max_range(niirs, 9.0)
+    assert np.isnan(float(never.max_range))
+    assert int(never.goal_flags) == study.goals.GOAL_FLAGS["never_meets"]
+    always = study.max_range(niirs, 1.0)
+    assert float(always.max_range) == 30e3
+    assert int(always.goal_flags) == study.goals.GOAL_FLAGS["bound_at_grid_edge"]
+
+
+def test_max_range_stops_at_an_invalid_cell():
+    # the third cell is beyond the database: the search ends at 10 km, flagged
+    niirs = _line([8, 7, 7, 6.5], [0.0, 10e3, 20e3, 30e3])
+    flags = xr.zeros_like(niirs, dtype=np.int32)
+    flags[2] = xbsm.flags.flag("beyond_database")
+    out = study.max_range(niirs, 6.0, flags=flags)
+    assert float(out.max_range) == 10e3
+    assert int(out.goal_flags) == study.goals.GOAL_FLAGS["invalid_cell"]
+
+
+def test_min_parameter_over_other_dimensions_at_once():
+    # NIIRS rising with aperture; two visibilities with different crossings
+    d = np.array([0.1, 0.2, 0.3, 0.4])
+    niirs = xr.DataArray([[4.0, 5.0, 6.0, 7.0], [3.0, 4.0, 4.5, 5.5]],
+                         dims=("visibility", "aperture_diameter"),
+                         coords={"aperture_diameter": d, "visibility": [23.0, 5.0]})
+    out = study.min_parameter(niirs, 5.0, "aperture_diameter")
+    # 5.0 is met first at 0.2 (vis 23: exactly) and between 0.3 (4.5) and 0.4 (5.5) for vis 5
+    np.testing.assert_allclose(out.min_aperture_diameter.values, [0.2, 0.35], rtol=1e-12)
+
+
+def test_goals_on_a_study_result_stay_lazy(tiny):
+    result = study.run(tiny)
+    with dask.config.set(scheduler=_raise_on_compute):
+        out = study.max_range(result.niirs, 7.0, flags=result.flags)
+    assert out.max_range.chunks is not None
+    eager = study.max_range(result.niirs.compute(), 7.0, flags=result.flags.compute())
+    xr.testing.assert_equal(out.compute(), eager)
+
+
+def test_probability_meets_is_the_normal_cdf():
+    # P(N >= T) for N ~ Normal(prediction, 0.35): scipy.stats.norm as the reference
+    niirs = xr.DataArray([5.0, 5.35, 4.3])
+    p = study.probability_meets(niirs, 5.0)
+    np.testing.assert_allclose(p.values, norm.cdf((niirs.values - 5.0) / 0.35), rtol=1e-14)
+    assert float(p[0]) == 0.5
+    with pytest.raises(ValueError, match="standard_error"):
+        study.probability_meets(niirs, 5.0, standard_error=0.0)
