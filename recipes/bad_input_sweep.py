@@ -5,8 +5,15 @@ public boundary, every failure named or flagged". Each case calls one public
 entry point with one bad or edge-case input and its outcome gets one class:
 
 - ``clear_error``: a ValueError / TypeError raised by xbsm (or argparse for the
-  command line) whose message names the user's parameter or knob and states
-  the allowed range or choices (a bracketed interval, ``must``, ``one of``...);
+  command line) whose message names the user's parameter or knob and either
+  states the allowed range or choices (a bracketed interval, ``must``, ``one
+  of``, ``at most``...) or, after a colon or semicolon, the fix (``give them
+  one length``, ``name the dimension ...``, ``make it with xbsm.sensor(...)``,
+  ``evaluate the grid in pieces``). The second form was added after the
+  commit-c9fc86a run: errors about dimensions and missing parameters have no
+  numeric range to state, and were counted cryptic although they name the
+  parameter and tell the user exactly what to do. An error raised outside
+  xbsm, or whose message names none of the case's parameters, stays cryptic;
 - ``flagged``: a result whose ``flags`` variable marks the problem with a bit
   the same call on valid input does not set (NaN cells must carry a bit);
 - ``sensible``: a result that meets the case's oracle (for example: a float32
@@ -398,10 +405,16 @@ SPECTRAL = [
      dict(optics_transmission=QE_UM)),
     ("stray_um", "stray_irradiance curve with wavelengths in um",
      dict(stray_irradiance=QE_UM * 1e6)),
+    ("transmission_partial_band", "optics_transmission curve covering only 0.6-0.9 um of a "
+     "0.55-0.85 um band", dict(optics_transmission=QE_M.isel(wavelength=[1, 2]).assign_coords(
+         wavelength=[0.6e-6, 0.9e-6]))),
 ]
+PARTIAL_ORACLE = ("legitimate (zero outside the curve's range) but the user must learn it: "
+                  "a partial_spectral_coverage flag (or an error); unflagged is wrong")
 for cid, desc, kw in SPECTRAL:
     add(f"sensor.spectral.{cid}", "sensor", desc + " -> niirs",
-        lambda kw=kw: xbsm.niirs(sen(**kw), SC), names=tuple(kw))
+        lambda kw=kw: xbsm.niirs(sen(**kw), SC), names=tuple(kw),
+        oracle=PARTIAL_ORACLE if "partial" in cid else "")
 add("sensor.spectral.qe_units_um_attr", "sensor",
     "QE curve wavelengths in um with coordinate attrs units='um' -> snr",
     lambda: xbsm.snr(sen(quantum_efficiency=QE_UM.assign_coords(
@@ -543,6 +556,34 @@ KNOB_CHOICES = {
     "turbulence_path_rule": ("trapezoid", "gauss-legendre"), "elevation": ("look-down", "target"),
 }
 KNOB_VALID_EXTREMES = {("otf_wavelengths", 1)}  # one OTF wavelength: crude but documented
+CONVERGED_NIIRS = 0.01  # the NIIRS error undersampled_grid promises to flag (methods.py)
+
+
+def even_grid_check(result):
+    """An even ``frequency_samples`` is a valid grid: compare with the converged edge rule.
+
+    pyBSM's slice of an N-point grid ``linspace(-1, 1, N)`` is ``arange(0, 1, 2/(N-1))``:
+    for N = 100 that is 50 samples up to 0.99 of the cutoff, as N = 101 gives 50 up to
+    0.98. The result is right if it agrees with the same preset using the converged
+    Gauss-Legendre edge rule within 0.01 NIIRS (the error ``undersampled_grid`` flags
+    beyond), or if it carries ``undersampled_grid``.
+    """
+    bits = int(np.bitwise_or.reduce(result.flags.values.ravel()))
+    if bits & FLAGS["undersampled_grid"][0]:
+        return "flagged", "undersampled_grid set"
+    ref = xbsm.niirs(S, SC, method=xbsm.method("pybsm", edge_rule="gauss_legendre"))
+    err = float(np.max(np.abs(result.niirs - ref.niirs)))
+    if err <= CONVERGED_NIIRS:
+        return "sensible", f"within {err:.2g} NIIRS of the converged edge rule"
+    return "silent_wrong", f"{err:.3g} NIIRS from the converged edge rule, not flagged"
+
+
+KNOB_CUSTOM = {  # (knob, value) -> (check, oracle)
+    ("frequency_samples", 100): (
+        even_grid_check,
+        "an even grid is valid (50 samples to 0.99 cutoff): niirs within 0.01 of "
+        "method('pybsm', edge_rule='gauss_legendre'), or flagged undersampled_grid"),
+}
 SHARP = sen(filter_kernel=[[-0.25, 1.5, -0.25]])  # filter_otf matters only with a kernel
 
 
@@ -564,11 +605,13 @@ def knob_case(knob, value):
                     return cls, f"silently treated as {knob}={choice!r}"
         return cls, note
 
+    custom_check, custom_oracle = KNOB_CUSTOM.get((knob, value), (None, None))
     add(f"method.{knob}={slug(value)}", "method",
         f"xbsm.method({preset!r}, {knob}={value!r}) -> niirs", call, names=(knob,),
-        expect="check", check=check,
-        oracle="valid extreme: finite or flagged" if valid else
-        "invalid knob: a clear error or a flag; a finite result is a silent coercion")
+        expect="check", check=custom_check or check,
+        oracle=custom_oracle or ("valid extreme: finite or flagged" if valid else
+                                 "invalid knob: a clear error or a flag; a finite result is "
+                                 "a silent coercion"))
 
 
 for knob, values in METHOD_BAD.items():
@@ -674,8 +717,15 @@ add("niirs.edited_focal_zero", "niirs", "s.assign(focal_length=0.0)",
     lambda: xbsm.niirs(S.assign(focal_length=0.0), SC), names=("focal_length",))
 add("niirs.edited_altitude", "niirs", "sc.assign(altitude=-5.0)",
     lambda: xbsm.niirs(S, SC.assign(altitude=-5.0)), names=("altitude",))
-add("niirs.edited_kernel", "niirs", "s.assign(filter_kernel=2x2 NaN kernel)",
-    lambda: xbsm.niirs(S.assign(filter_kernel=xr.DataArray(np.full((2, 2), NAN),
+# A kernel of another shape cannot be put in with s.assign(filter_kernel=...): xarray itself
+# refuses to resize the kernel dims there, before xbsm is called; drop_vars first.
+add("niirs.edited_kernel", "niirs",
+    "s.drop_vars('filter_kernel').assign(filter_kernel=2x2 NaN kernel)",
+    lambda: xbsm.niirs(S.drop_vars("filter_kernel").assign(filter_kernel=xr.DataArray(
+        np.full((2, 2), NAN), dims=("kernel_y", "kernel_x"))), SC),
+    names=("filter_kernel",))
+add("niirs.edited_kernel_sum", "niirs", "s.assign(filter_kernel=[[2.0]]) (sums to 2)",
+    lambda: xbsm.niirs(S.assign(filter_kernel=xr.DataArray([[2.0]],
                                                            dims=("kernel_y", "kernel_x"))), SC),
     names=("filter_kernel",))
 add("niirs.edited_obscuration", "niirs", "s.assign(obscuration_ratio=1.0)",
@@ -992,7 +1042,13 @@ def grd(snr, method="pybsm", ifov=IFOV, slant=21e3, otf=None):
 
 
 def nothing_resolved(result):
+    """GRD at SNR <= 3: inf / NaN, or pyBSM's finite number carrying grd_unresolved."""
     value = np.asarray(result, dtype=float)
+    flags = result.coords.get("grd_flags") if isinstance(result, xr.DataArray) else None
+    flagged = flags is not None and bool(np.all(
+        (np.asarray(flags) & FLAGS["grd_unresolved"][0]) != 0))
+    if flagged:
+        return "flagged", f"GRD {value.ravel()[:1]} m with grd_unresolved"
     if np.all(np.isnan(value) | np.isinf(value)):
         return "sensible", f"GRD {value.ravel()[:1]} (nothing resolved)"
     return "silent_wrong", f"finite GRD {value.ravel()[:1]} m though nothing can be resolved"
@@ -1000,12 +1056,14 @@ def nothing_resolved(result):
 
 GRD_NOTHING = [("snr0_pybsm", 0.0, "pybsm"), ("snr0_first", 0.0, "first_crossing"),
                ("snr_negative_pybsm", -1.0, "pybsm"), ("snr_tiny_pybsm", 1e-12, "pybsm"),
-               ("snr_2_pybsm", 2.0, "pybsm"), ("snr_nan_pybsm", NAN, "pybsm")]
+               ("snr_2_pybsm", 2.0, "pybsm"), ("snr_nan_pybsm", NAN, "pybsm"),
+               ("snr_2_first", 2.0, "first_crossing")]
 for cid, snr_value, method in GRD_NOTHING:
     add(f"grd.{cid}", GRD, f"ground_resolved_distance(otf, snr={snr_value}, method={method!r})",
         lambda s=snr_value, m=method: grd(s, m), names=("snr",), expect="check",
         check=nothing_resolved, main="grd",
-        oracle="SNR <= 3: MTF never reaches 3/SNR > 1, nothing is resolved: GRD must be inf/NaN")
+        oracle="SNR <= 3: MTF never reaches 3/SNR > 1, nothing is resolved: GRD must be "
+        "inf/NaN or carry grd_unresolved")
 add("grd.method_bogus", GRD, "method='PYBSM'", lambda: grd(10.0, "PYBSM"), names=("method",),
     main="grd")
 add("grd.slant_negative", GRD, "slant_range=-21e3", lambda: grd(10.0, slant=-21e3),
@@ -1024,7 +1082,7 @@ add("grd.decreasing_frequency", GRD, "otf_slice with decreasing frequency (first
 # --- command line (run as a subprocess; {tmp} is a fresh temporary folder)
 CLI = [
     ("no_args", [], ("command",), "reject"),
-    ("unknown_command", ["run", "study.toml"], ("run", "command"), "reject"),
+    ("unknown_command", ["frobnicate"], ("frobnicate", "command"), "reject"),
     ("bad_method", ["olson", "--method", "fastest"], ("--method", "fastest"), "reject"),
     ("method_upper", ["olson", "--method", "PYBSM"], ("--method", "PYBSM"), "reject"),
     ("missing_method_value", ["olson", "--method"], ("--method",), "reject"),
@@ -1036,14 +1094,17 @@ CLI = [
 ]
 
 
-def cli_case(cid, argv, names, expect):
+def cli_case(cid, argv, names, expect, needs_range=True):
     add(f"cli.{cid}", "cli", "python -m xbsm.cli " + " ".join(argv),
-        lambda: argv, names=names, expect=expect, main="cli",
-        oracle="argparse-style usage error naming the argument and the choices")
+        lambda: argv, names=names, expect=expect, main="cli", needs_range=needs_range,
+        oracle="argparse-style usage error naming the argument and the choices" if needs_range
+        else "an error (no traceback) naming the file")
 
 
 for cid, argv, names, expect in CLI:
     cli_case(cid, argv, names, expect)
+cli_case("run_missing_study", ["run", "{tmp}/no_such_study.toml"], ("no_such_study.toml",),
+         "reject", needs_range=False)
 
 
 # ---------------------------------------------------------------------------
@@ -1051,9 +1112,13 @@ for cid, argv, names, expect in CLI:
 
 RANGE_RE = re.compile(
     r"\[[^\]]*,[^\]]*\]|\([^)]*,[^)]*\)|\{|\bmust\b|\bone of\b|choose from|\bknown\b|allowed"
-    r"|\bwithin\b|\bbetween\b|\brequired\b|\bexpected\b|\bnearest\b|did you mean",
+    r"|\bwithin\b|\bbetween\b|\brequired\b|\bexpected\b|\bnearest\b|did you mean"
+    r"|\bat (most|least)\b",
     re.IGNORECASE,
 )
+# the fix, stated after a colon or semicolon (the second form of a clear error; docstring)
+FIX_RE = re.compile(
+    r"[:;]\s*(give|name the|rename|make it with|evaluate|use|pass|drop)\b", re.IGNORECASE)
 MEMORY_RE = re.compile(r"Unable to allocate|too big|maximum (possible|supported) size", re.I)
 CRYPTIC_TYPES = ("MergeError", "AlignmentError")
 CLEAR_TYPES = (ValueError, TypeError, FileNotFoundError)
@@ -1167,7 +1232,8 @@ def classify_error(case, exc):
     if isinstance(exc, MemoryError) or MEMORY_RE.search(text):
         return "blowup", message, "memory"
     named = any(n and n in text for n in case.names)
-    ranged = bool(RANGE_RE.search(text)) or not case.needs_range
+    ranged = (bool(RANGE_RE.search(text)) or bool(FIX_RE.search(text))
+              or not case.needs_range)
     if (isinstance(exc, CLEAR_TYPES) and type(exc).__name__ not in CRYPTIC_TYPES
             and raised_by_xbsm(exc) and named and ranged):
         return "clear_error", message, ""
@@ -1182,7 +1248,7 @@ def classify_error(case, exc):
     if not named:
         why.append("names none of " + "/".join(case.names) if case.names else "no parameter")
     if not ranged:
-        why.append("no allowed range")
+        why.append("no allowed range or fix")
     return "cryptic_error", message, "; ".join(why)
 
 
@@ -1281,7 +1347,10 @@ def run_cli(case):
     if "Traceback" in err:
         return "cryptic_error", last, f"traceback, exit status {proc.returncode}", elapsed
     named = any(n in err for n in case.names)
-    if proc.returncode == 2 and "usage:" in err and named and RANGE_RE.search(err):
+    if case.needs_range and proc.returncode == 2 and "usage:" in err and named and (
+            RANGE_RE.search(err)):
+        return "clear_error", last, "", elapsed
+    if not case.needs_range and named:  # a file argument: naming it is enough
         return "clear_error", last, "", elapsed
     return "cryptic_error", last, f"exit status {proc.returncode}", elapsed
 

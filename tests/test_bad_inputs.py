@@ -9,6 +9,7 @@ parameter is covered the day it is added.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,6 +28,7 @@ SENSOR = dict(aperture_diameter=0.275, focal_length=4.0, pixel_pitch_x=8e-6, **B
 SCENARIO = dict(altitude=9000.0, ground_range=20e3, visibility=5.0)
 S = xbsm.sensor(**SENSOR)
 SC = xbsm.scenario(**SCENARIO)
+PYBSM_SENSOR = dict(D=0.275, f=4.0, p_x=8e-6, opt_trans_wavelengths=np.array([0.55e-6, 0.85e-6]))
 
 
 def _bad_values(spec: params.Spec):
@@ -61,6 +63,7 @@ def test_out_of_range_or_non_numeric_value_names_the_parameter(make, name, value
     assert name in message
     assert ("must lie in" in message or "real number" in message or "must be" in message
             or "smaller than" in message), message
+    assert not [part for part in INTERNALS if part in message], message
 
 
 def test_table_has_at_least_120_rows():
@@ -71,6 +74,14 @@ def test_table_has_at_least_120_rows():
 def test_each_reserved_dimension_name_is_refused(dim):
     with pytest.raises(ValueError, match=f"swept on dimension '{dim}'"):
         xbsm.scenario(**{**SCENARIO, "ground_range": xr.DataArray([0.0, 2e4], dims=dim)})
+
+
+def test_the_guide_lists_each_reserved_dimension_name():
+    # docs/guide.md names every reserved dimension; the <parameter>_wavelength ones as a pattern
+    guide = (Path(__file__).resolve().parent.parent / "docs" / "guide.md").read_text()
+    for dim in params.RESERVED_DIMS:
+        shown = "<parameter>_wavelength" if dim.endswith("_wavelength") else dim
+        assert f"`{shown}`" in guide, dim
 
 
 def _edited(**changes):
@@ -198,12 +209,45 @@ OTHER_ROWS = [
                                            fy=xr.DataArray([0.0, np.nan], dims="fy")),
      ValueError, "fy must lie in"),
     ("database_not_netcdf", lambda: xbsm.open_atmosphere(__file__), ValueError,
-     "is not an xbsm atmosphere database"),
+     "is not an xbsm atmosphere database: it cannot be read as a NetCDF file"),
     ("database_chunks_bogus", lambda: xbsm.open_atmosphere(chunks="bogus"), ValueError,
-     "chunks must be what xarray's .chunk() takes"),
+     "chunks must be None, 'auto', a byte size"),
     ("integration_time_negative", lambda: reflectance_to_photoelectrons(
         S, SC, integration_time=-1.0), ValueError, "integration_time must lie in (0, inf) s"),
+    ("pybsm_other_noise_negative", lambda: xbsm.pybsm_compat.sensor(
+        **PYBSM_SENSOR, other_noise=np.array([3.0, -5.0])), ValueError,
+     "other_noise must hold rms noise values in [0, inf) electrons; got -5.0"),
+    ("pybsm_qe_wavelengths_in_micrometres", lambda: xbsm.pybsm_compat.sensor(
+        **PYBSM_SENSOR, qe=np.array([0.7, 0.7]), qe_wavelengths=np.array([0.55, 0.85])),
+     ValueError, "must reach into the band. Are its wavelengths in micrometres"),
+    ("pybsm_error_names_the_pybsm_keyword", lambda: xbsm.pybsm_compat.sensor(
+        **PYBSM_SENSOR, qe=np.array([0.7, 0.7]), qe_wavelengths=np.array([0.4e-6, 0.5e-6])),
+     ValueError, "(pyBSM keyword: qe over qe_wavelengths)"),
+    ("pybsm_scenario_error_names_the_pybsm_keyword", lambda: xbsm.pybsm_compat.scenario(
+        ihaze=1, altitude=9000.0, ground_range=2e4, aircraft_speed=-1.0), ValueError,
+     "platform_speed must lie in [0, inf) m s-1; got -1.0 (pyBSM keyword: aircraft_speed)"),
+    ("edited_kernel_nan", lambda: xbsm.niirs(S.drop_vars("filter_kernel").assign(
+        filter_kernel=xr.DataArray(np.full((2, 2), np.nan), dims=("kernel_y", "kernel_x"))),
+        SC), ValueError, "filter_kernel must be finite"),
+    ("edited_kernel_sum", lambda: xbsm.snr(S.assign(filter_kernel=xr.DataArray(
+        [[2.0]], dims=("kernel_y", "kernel_x"))), SC), ValueError,
+     "filter_kernel must sum to 1"),
+    ("qe_without_wavelength_coordinate", lambda: xbsm.sensor(**{
+        **SENSOR, "quantum_efficiency": xr.DataArray([0.5, 0.6], dims="wavelength")}),
+     ValueError, "has no 'wavelength' coordinate: give the wavelength of each value [m]"),
+    ("required_pitch_none", lambda: xbsm.sensor(**{**SENSOR, "pixel_pitch_x": None}),
+     ValueError, "pixel_pitch_x must be a real number"),
+    ("required_aperture_none", lambda: xbsm.sensor(**{**SENSOR, "aperture_diameter": None}),
+     ValueError, "aperture_diameter must be a real number"),
+    ("non_numeric_sweep_shown_briefly", lambda: xbsm.sensor(**{
+        **SENSOR, "focal_length": xr.DataArray(["4"], dims="f")}), ValueError,
+     "got an xr.DataArray of dtype <U1 on dims ('f',)"),
 ]
+
+# Fragments of library internals an error message must never show the user (issue 8):
+# raw xarray / numpy reprs and errors, dask's byte-unit parser, netCDF error codes.
+INTERNALS = ("<xarray.", "array([", "AlignmentError", "reindex", "unhashable",
+             "byte unit", "Errno", "NetCDF:")
 
 
 @pytest.mark.parametrize("call, error, fragment",
@@ -212,6 +256,7 @@ def test_bad_call_raises_a_clear_error(call, error, fragment):
     with pytest.raises(error) as err:
         call()
     assert fragment in str(err.value), str(err.value)
+    assert not [part for part in INTERNALS if part in str(err.value)], str(err.value)
 
 
 # --- inputs that are legitimate but odd: converted, promoted or flagged, never silent ------
@@ -280,6 +325,62 @@ def test_a_system_blurred_over_many_pixels_is_flagged_not_trusted():
     assert bool(xbsm.flags.decode(n.flags).blur_unresolved.all())
     assert bool(xbsm.flags.is_invalid(n.flags).all())
     assert not bool(xbsm.flags.decode(xbsm.niirs(S, SC).flags).blur_unresolved.any())
+
+
+CURVE_BAND = dict(dims="wavelength")
+
+
+@pytest.mark.parametrize("name, wavelengths", [
+    ("quantum_efficiency", [0.5e-6, 0.6e-6]),      # ends inside the 0.55-0.85 um band
+    ("optics_transmission", [0.6e-6, 0.9e-6]),     # starts inside it
+    ("stray_irradiance", [0.6e-6, 0.7e-6]),        # inside at both ends
+])
+def test_a_curve_covering_part_of_the_band_is_flagged(name, wavelengths):
+    # docs/flags.md: partial_spectral_coverage (a notice) on snr, niirs and system_otf
+    curve = xr.DataArray([0.5, 0.5], coords={"wavelength": wavelengths}, **CURVE_BAND)
+    s = xbsm.sensor(**{**SENSOR, name: curve})
+    for result in (xbsm.snr(s, SC), xbsm.niirs(s, SC), xbsm.system_otf(s, SC)):
+        bits = xbsm.flags.decode(result.flags)
+        assert bool(bits.partial_spectral_coverage.all())
+        assert not bool(bits.invalid.any())
+    assert "partial_spectral_coverage" in xbsm.flags.NOTICE
+
+
+def test_a_curve_covering_the_band_is_not_flagged():
+    # the band edges written another way (0.55 * 1e-6) still cover the band; a curve sampled
+    # only outside the band spans it and is non-zero inside (it was refused as zero before)
+    curve = xr.DataArray([0.7, 0.6], coords={"wavelength": [0.55 * 1e-6, 0.85 * 1e-6]},
+                         **CURVE_BAND)
+    wider = xr.DataArray([0.7, 0.6], coords={"wavelength": [0.4e-6, 1.0e-6]}, **CURVE_BAND)
+    for s in (xbsm.sensor(**{**SENSOR, "quantum_efficiency": curve}),
+              xbsm.sensor(**{**SENSOR, "optics_transmission": wider}), S):
+        assert not bool(has_flag(xbsm.niirs(s, SC).flags, "partial_spectral_coverage").any())
+
+
+def test_a_sensor_without_signal_is_flagged_in_its_own_cells_of_a_sweep():
+    # cold_filter_transmission = 0: no wavelength reaches the detector, so no optics cutoff
+    # D / lambda_min of the signal; the call must not fail for the whole sweep (it raised
+    # "cutoff must be finite"), the zero-signal cell is NaN with snr_nonpositive (flags.md)
+    s = xbsm.sensor(**{**SENSOR, "cold_filter_transmission": xr.DataArray([0.0, 1.0],
+                                                                          dims="cold_filter")})
+    n = xbsm.niirs(s, SC)
+    dark, lit = n.isel(cold_filter=0), n.isel(cold_filter=1)
+    assert bool(np.isnan(dark.niirs).all()) and bool(has_flag(dark.flags, "snr_nonpositive").all())
+    assert bool(np.isfinite(lit.niirs).all())
+    single = xbsm.niirs(xbsm.sensor(**SENSOR), SC)
+    np.testing.assert_allclose(lit.niirs, single.niirs, rtol=1e-12)
+
+
+def test_an_even_pybsm_grid_is_a_valid_grid():
+    # pyBSM's slice of linspace(-1, 1, N) is arange(0, 1, 2 / (N - 1)): 50 samples up to
+    # 0.99 of the cutoff for N = 100 (0.98 for N = 101). The bound: undersampling_threshold
+    # flags wherever the uniform rule's NIIRS error may exceed 0.01 (xbsm.methods), so an
+    # unflagged even grid must agree with the converged Gauss-Legendre rule within 0.01.
+    even = xbsm.niirs(S, SC, xbsm.method("pybsm", frequency_samples=100))
+    converged = xbsm.niirs(S, SC, xbsm.method("pybsm", edge_rule="gauss_legendre"))
+    assert not bool(has_flag(even.flags, "undersampled_grid").any())
+    assert float(abs(even.niirs - converged.niirs).max()) <= 0.01
+    assert float(abs(even.rer - converged.rer)) <= 1e-3
 
 
 def test_method_overrides_are_recorded_in_the_result():

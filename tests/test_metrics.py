@@ -430,6 +430,27 @@ def test_grd_detector_limit_and_low_snr():
     assert np.isnan(grd.values[2:]).all()
 
 
+@pytest.mark.parametrize("method", ["first_crossing", "pybsm"])
+def test_grd_where_nothing_is_resolved_carries_grd_unresolved(method):
+    # 3/SNR >= 1 for SNR <= 3: the MTF (at most 1) never falls to the threshold, so no
+    # square wave is resolved (IBSM Eq. 3-54); docs/flags.md: grd_unresolved where
+    # SNR <= 3 or NaN, snr_nonpositive where SNR <= 0
+    f = np.linspace(0, 10, 11)
+    mtf = slice_da(np.clip(1 - f / 10, 0, 1), f)
+    snr = xr.DataArray([50.0, 3.0, 2.0, 1e-12, 0.0, np.nan], dims="snr")
+    grd = metrics.ground_resolved_distance(mtf, snr=snr, ifov=0.01, slant_range=1.0,
+                                           method=method)
+    bits = flags.decode(grd["grd_flags"])
+    assert bits.grd_unresolved.values.tolist() == [False, True, True, True, True, True]
+    assert bits.snr_nonpositive.values.tolist() == [False, False, False, False, True, False]
+    assert bool(bits.invalid[1:].all()) and not bool(bits.invalid[0])
+    assert np.isfinite(float(grd[0]))
+    if method == "pybsm":  # pyBSM's own finite value is kept, and flagged
+        assert np.isfinite(grd.values[1:4]).all()
+    else:
+        assert np.isinf(grd.values[1:4]).all()
+
+
 def test_grd_on_gauss_nodes_uses_implicit_unit_otf_at_zero():
     nodes, _ = quadrature.gauss_legendre_rule([0.0, 1.0], 4)
     mtf = slice_da(1 - nodes.values, nodes.values)  # linear, crosses 0.5 at f = 0.5

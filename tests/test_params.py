@@ -137,3 +137,41 @@ def test_dask_inputs_raise_when_computed():
     sc = xbsm.scenario(altitude=9000.0, ground_range=gr, visibility=23.0)
     with pytest.raises(ValueError, match="ground_range"):
         sc.ground_range.compute()
+
+
+def test_sweeps_of_parameters_other_defaults_derive_from():
+    # pixel_pitch_y, detector widths and the wavefront correlation lengths default to a swept
+    # parameter and carry its dimension; every point equals the scalar call (to rounding:
+    # the swept call broadcasts in another order)
+    from xbsm.examples import olson_scenario, olson_sensor
+    sweep = olson_sensor("nir",
+                         aperture_diameter=xr.DataArray([0.2, 0.3], dims="aperture_diameter"),
+                         pixel_pitch_x=xr.DataArray([5e-6, 8e-6], dims="pixel_pitch_x"))
+    assert sweep.wavefront_correlation_length_x.dims == ("aperture_diameter",)
+    assert sweep.detector_width_y.dims == ("pixel_pitch_x",)
+    scenario = olson_scenario(ground_range=20e3, visibility=5.0)
+    swept = xbsm.niirs(sweep, scenario).niirs
+    one = xbsm.niirs(olson_sensor("nir", aperture_diameter=0.3, pixel_pitch_x=5e-6),
+                     scenario).niirs
+    xr.testing.assert_allclose(swept.sel(aperture_diameter=0.3, pixel_pitch_x=5e-6, drop=True),
+                               one, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("dim", ["snr", "niirs", "gsd", "system"])
+def test_a_sweep_dimension_named_like_a_result_variable_is_refused(dim):
+    # the result would replace that variable by the sweep's coordinate, silently
+    with pytest.raises(ValueError, match=f"dimension '{dim}', the name of a result variable"):
+        xbsm.scenario(altitude=9000.0, ground_range=xr.DataArray([1e3, 2e4], dims=dim),
+                      visibility=23.0)
+
+
+def test_result_names_cover_every_result_variable():
+    from xbsm.examples import olson_scenario, olson_sensor
+    from xbsm.params import RESERVED_DIMS, RESULT_NAMES
+    s, sc = olson_sensor("nir"), olson_scenario(ground_range=1e3, visibility=23.0)
+    results = (xbsm.snr(s, sc), xbsm.niirs(s, sc), xbsm.system_otf(s, sc))
+    names = set().union(*(set(r.variables) for r in results)) - set(RESERVED_DIMS)
+    assert names <= set(RESULT_NAMES), names - set(RESULT_NAMES)
+    # a parameter echoed under its own name may still sweep on its own dimension
+    echoed = olson_sensor("nir", read_noise=xr.DataArray([10.0, 25.0], dims="read_noise"))
+    np.testing.assert_array_equal(xbsm.niirs(echoed, sc).read_noise, [10.0, 25.0])

@@ -155,8 +155,10 @@ def open_atmosphere(path=None, chunks=_FILE_CHUNKS) -> xr.Dataset:
     try:
         raw = ds["atmosphere"] if chunks is None else ds["atmosphere"].chunk(chunks)
     except (TypeError, ValueError) as err:
-        raise ValueError(f"chunks must be what xarray's .chunk() takes (a dict of dimension "
-                         f"sizes, an int, 'auto' or None); got {chunks!r}: {err}") from None
+        raise ValueError(
+            "chunks must be None, 'auto', a byte size such as '64MB', an int (the chunk size "
+            "along every dimension) or a dict from dimension names (visibility, altitude, "
+            f"ground_range, component, wavelength) to chunk sizes; got {chunks!r}") from err
     divisor = xr.DataArray(_DIVISOR, dims="component")
     si = (raw / divisor).astype(np.float32)
     si.attrs = {
@@ -193,10 +195,15 @@ def _load_database(path: str) -> _Database:
             cube = nc["atmosphere"][...]
             coords = {name: np.asarray(nc[name][...], dtype=np.float64)
                       for name in ("visibility", "altitude", "ground_range", "wavelength")}
-    except (OSError, KeyError, IndexError) as err:
-        raise ValueError(f"path {path!r} is not an xbsm atmosphere database (a NetCDF file "
-                         f"with variable 'atmosphere', as recipes/build_atmosphere.py writes): "
-                         f"{err}") from None
+    except OSError as err:
+        raise ValueError(f"path {path!r} is not an xbsm atmosphere database: it cannot be "
+                         "read as a NetCDF file (the database is the NetCDF file "
+                         "recipes/build_atmosphere.py writes)") from err
+    except (KeyError, IndexError) as err:
+        raise ValueError(f"path {path!r} is not an xbsm atmosphere database: it lacks the "
+                         "variable 'atmosphere' or its coordinates (visibility, altitude, "
+                         "ground_range, wavelength) that recipes/build_atmosphere.py "
+                         "writes") from err
     cube = np.ascontiguousarray(cube, dtype=np.float32)
     cube /= _DIVISOR[:, None]  # float32 / float32: pyBSM's bits; NaN stays NaN
     present = ~np.isnan(cube[:, :, :, 0, 0])

@@ -17,7 +17,8 @@ question a user has:
   scale. Test with :func:`is_outside_calibration`.
 - :data:`NOTICE`: something the user should know that makes the number
   neither wrong nor extrapolated (a shortened integration time, an
-  atmosphere interpolated across the database's altitude gap).
+  atmosphere interpolated across the database's altitude gap, a spectral
+  curve that covers only part of the band).
 """
 
 from __future__ import annotations
@@ -76,10 +77,22 @@ FLAGS = MappingProxyType({
         "spreads its nodes to the optics cutoff and does not resolve the narrow OTF; the "
         "result may be wrong (measured up to 3.6 NIIRS for accurate)",
     ),
+    "partial_spectral_coverage": (
+        8192,
+        "a spectral curve of the sensor (quantum efficiency, optics transmission or stray "
+        "irradiance) covers only part of the band [wavelength_min, wavelength_max]; it is "
+        "taken as zero over the rest",
+    ),
+    "grd_unresolved": (
+        16384,
+        "contrast SNR at or below 3 (or NaN): the MTF never reaches the 3/SNR threshold and "
+        "no square wave is resolved; GRD is inf (NaN at SNR <= 0), or pyBSM's finite "
+        "slant range x 1e12 with method='pybsm'",
+    ),
 })
 
 INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive", "rer_nonpositive",
-           "blur_unresolved")
+           "blur_unresolved", "grd_unresolved")
 """Bits saying a number is NaN or may be wrong."""
 
 CALIBRATION = (
@@ -92,11 +105,11 @@ CALIBRATION = (
 )
 """Bits saying a number is outside a GIQE's calibration (or off the NIIRS scale)."""
 
-NOTICE = ("atmosphere_sparse", "well_fill_limited")
+NOTICE = ("atmosphere_sparse", "well_fill_limited", "partial_spectral_coverage")
 """Bits that are neither: information about how a number was obtained."""
 
 INVALID_MASK = sum(FLAGS[name][0] for name in INVALID)
-"""OR of the :data:`INVALID` bits (6785)."""
+"""OR of the :data:`INVALID` bits (23169)."""
 
 CALIBRATION_MASK = sum(FLAGS[name][0] for name in CALIBRATION)
 """OR of the :data:`CALIBRATION` bits (1400)."""

@@ -64,9 +64,14 @@ def _snr(sensor: xr.Dataset, scenario: xr.Dataset, m: Method, targets: str):
     signal = radiometry.signal_terms(sensor, atm, target, background, m.constants, band=band)
     cutoff = optics_cutoff(sensor["aperture_diameter"], atm["wavelength"],
                            band["quantum_efficiency"], band["optics_transmission"])
+    # no wavelength with signal (cold_filter_transmission = 0): the band's own D / lambda_min,
+    # so that the call completes; the SNR there is 0, flagged snr_nonpositive
+    cutoff = cutoff.fillna(sensor["aperture_diameter"] / sensor["wavelength_min"])
     noise_ = noise.noise_terms(signal, sensor)
     brighter = np.maximum(signal["target_photoelectrons"], signal["background_photoelectrons"])
     flags = fl.set_flag(atm["flags"], "well_fill_limited", signal["well_fill_scale"] < 1.0)
+    if params._partial_spectral_coverage(sensor):  # one bit for the whole sensor
+        flags = fl.set_flag(flags, "partial_spectral_coverage", xr.DataArray(True))
     return result({
         "snr": noise_["snr"],
         "snr_frame": noise_["snr_frame"],

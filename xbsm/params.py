@@ -165,6 +165,21 @@ RESERVED_DIMS = (
 )
 
 
+RESULT_NAMES = (
+    "niirs", "snr", "snr_frame", "effective_integration_time", "target_photoelectrons",
+    "background_photoelectrons", "contrast_photoelectrons", "well_fill", "shot_noise",
+    "scene_noise", "path_noise", "self_emission_noise", "dark_current_noise",
+    "quantization_noise", "read_noise", "other_noise", "total_noise", "rer_x", "rer_y",
+    "eho_x", "eho_y", "rer", "eho", "coherence_diameter", "cutoff_frequency", "rer_giqe5",
+    "gsd", "gsd_gp", "gsd_w", "noise_gain", "slant_range", "elevation_angle", "flags",
+    "spectral_weights", "aperture", "turbulence", "detector", "jitter", "drift", "wavefront",
+    "filter", "system_unfiltered", "system",
+)
+"""Variables of the results of ``snr``, ``niirs`` and ``system_otf``: a sweep dimension of
+one of these names would replace the variable by its coordinate (a parameter the result
+echoes under its own name, ``read_noise`` and ``other_noise``, may sweep on it)."""
+
+
 def _check_dims(name: str, value: xr.DataArray, allowed=()) -> None:
     """Refuse sweep dimensions that would collide with xbsm's own or another parameter."""
     for dim in value.dims:
@@ -174,6 +189,11 @@ def _check_dims(name: str, value: xr.DataArray, allowed=()) -> None:
             raise ValueError(
                 f"{name} is swept on dimension {dim!r}, a name xbsm uses itself; rename it "
                 f"(reserved: {', '.join(RESERVED_DIMS)})")
+        if dim in RESULT_NAMES and dim != name:
+            raise ValueError(
+                f"{name} is swept on dimension {dim!r}, the name of a result variable; "
+                "name the dimension anything else (result variables: see xbsm.params."
+                "RESULT_NAMES)")
         if dim != name and (dim in SENSOR_SPECS or dim in SCENARIO_SPECS):
             raise ValueError(
                 f"{name} is swept on dimension {dim!r}, the name of another parameter; "
@@ -195,9 +215,11 @@ def _as_float64(name: str, value, spec: Spec):
     """``value`` as float64 (promoting integers and float16/32); a clear error otherwise."""
     kind = np.asarray(value).dtype.kind if not isinstance(value, xr.DataArray) else value.dtype.kind
     if kind == "b" or kind not in "iuf":
+        shown = (f"an xr.DataArray of dtype {value.dtype} on dims {value.dims}"
+                 if isinstance(value, xr.DataArray) else f"{value!r:.80}")
         raise ValueError(
             f"{name} must be a real number or an xr.DataArray of real numbers "
-            f"[{spec.units}]; got {value!r:.80}")
+            f"[{spec.units}]; got {shown}")
     if isinstance(value, xr.DataArray):
         return value if value.dtype == np.float64 else value.astype(np.float64)
     return np.asarray(value, dtype=np.float64)
@@ -237,7 +259,10 @@ def _spectral(name: str, value, spec: Spec) -> xr.DataArray:
     if not isinstance(value, xr.DataArray) or "wavelength" not in value.dims:
         return _validated(name, value, spec)
     if "wavelength" not in value.coords:
-        raise ValueError(f"{name} needs a 'wavelength' coordinate [m]")
+        raise ValueError(
+            f"{name} is on dimension 'wavelength' but has no 'wavelength' coordinate: give "
+            "the wavelength of each value [m], strictly increasing, e.g. xr.DataArray(values, "
+            "dims='wavelength', coords={'wavelength': wavelengths})")
     wl = np.asarray(value["wavelength"].values, dtype=float)
     if wl.size < 1 or np.any(np.diff(wl) <= 0) or not np.all(np.isfinite(wl)):
         raise ValueError(f"{name}: its wavelength coordinate must be finite and increase strictly")
@@ -260,12 +285,35 @@ def _check_band_overlap(name: str, curve: xr.DataArray, low: float, high: float)
                     if wl[-1] > 1e-3 or wl[0] > 1e-3 else "")
             raise ValueError(
                 f"{name} is given over [{wl[0]:g}, {wl[-1]:g}] m, outside the band "
-                f"[wavelength_min, wavelength_max] = [{low:g}, {high:g}] m.{hint}")
-        inside = curve.where((curve[dim] >= low) & (curve[dim] <= high), drop=True)
+                f"[wavelength_min, wavelength_max] = [{low:g}, {high:g}] m; its wavelengths "
+                f"must reach into the band.{hint}")
+        lo, hi = max(wl[0], low), min(wl[-1], high)
+        inside = curve.where((curve[dim] >= lo) & (curve[dim] <= hi), drop=True)
+        if wl.size > 1 and curve.chunks is None:  # and the curve at the band edges
+            inside = xr.concat([inside, curve.interp({dim: [lo, hi]})], dim)
     else:
         inside = curve
     if name != "stray_irradiance" and inside.chunks is None and not bool((inside > 0).any()):
         raise ValueError(f"{name} is zero over the whole band [{low:g}, {high:g}] m: no signal")
+
+
+def _partial_spectral_coverage(sensor: xr.Dataset) -> bool:
+    """Whether a spectral curve of ``sensor`` covers only part of its band.
+
+    Such a curve is legitimate (it is zero outside its own wavelengths), but the
+    results carry the ``partial_spectral_coverage`` flag so that the user learns it.
+    The ends are compared with a relative tolerance of 1e-9 (a curve given at the
+    band edges in another floating-point spelling covers the band).
+    """
+    low, high = float(sensor["wavelength_min"]), float(sensor["wavelength_max"])
+    tolerance = 1e-9 * high
+    for name in SPECTRAL:
+        dim = f"{name}_wavelength"
+        if dim in sensor[name].dims:
+            wavelengths = sensor[dim].values
+            if wavelengths[0] > low + tolerance or wavelengths[-1] < high - tolerance:
+                return True
+    return False
 
 
 def unknown_keyword(kind: str, given: str, known) -> ValueError:
@@ -432,21 +480,28 @@ def sensor(
     given = dict(locals())
     # validate what the defaults are derived from first, so an error names the input
     checked = [name for name in ("pixel_pitch_x", "pixel_pitch_y", "detector_width_x",
-                                 "aperture_diameter") if given[name] is not None]
+                                 "aperture_diameter")
+               if given[name] is not None or name in ("pixel_pitch_x", "aperture_diameter")]
     for name in checked:
         given[name] = _validated(name, given[name], SENSOR_SPECS[name])
+    # defaults derived from another parameter sweep on that parameter's dimensions
+    derived = {}
     if pixel_pitch_y is None:
         given["pixel_pitch_y"] = given["pixel_pitch_x"]
+        derived["pixel_pitch_y"] = given["pixel_pitch_x"].dims
     if detector_width_x is None:
         given["detector_width_x"] = given["pixel_pitch_x"]
+        derived["detector_width_x"] = given["pixel_pitch_x"].dims
     if detector_width_y is None:
         given["detector_width_y"] = (
             given["detector_width_x"] / given["pixel_pitch_x"] * given["pixel_pitch_y"]
         )
+        derived["detector_width_y"] = given["detector_width_y"].dims
     for axis in ("x", "y"):
         key = f"wavefront_correlation_length_{axis}"
         if given[key] is None:
             given[key] = given["aperture_diameter"]
+            derived[key] = given["aperture_diameter"].dims
     kernel = given.pop("filter_kernel")
     values = {}
     for name, spec in SENSOR_SPECS.items():
@@ -455,7 +510,7 @@ def sensor(
         elif name in checked:
             values[name] = given[name]
         else:
-            values[name] = _validated(name, given[name], spec)
+            values[name] = _validated(name, given[name], spec, derived.get(name, ()))
     for name in ("wavelength_min", "wavelength_max"):
         if values[name].ndim:
             raise ValueError(f"{name} must be a scalar (band edges cannot be swept)")
@@ -630,7 +685,10 @@ def check_inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> None:
                 raise ValueError(f"the {kind} dataset has no parameter {name!r}; "
                                  f"make it with xbsm.{kind}(...)")
             value = ds[name]
-            _check_dims(name, value, allowed=(f"{name}_wavelength",))
+            # a parameter swept alongside another on that one's own dimension is paired
+            # with it (a derived default such as pixel_pitch_y, or a user's paired sweep)
+            paired = tuple(dim for dim in value.dims if dim in ds and ds[dim].dims == (dim,))
+            _check_dims(name, value, allowed=(f"{name}_wavelength", *paired))
             if value.chunks is None:
                 mask = spec.violated(value.values)
                 if np.any(mask):
@@ -639,8 +697,8 @@ def check_inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> None:
     if low.ndim or high.ndim or not float(low) < float(high):
         raise ValueError("wavelength_min and wavelength_max must be scalars with "
                          f"wavelength_min < wavelength_max; got {low.values} and {high.values}")
-    if "filter_kernel" not in sensor or set(sensor["filter_kernel"].dims) != {"kernel_y",
-                                                                               "kernel_x"}:
-        raise ValueError("the sensor's filter_kernel must be a 2-D array on "
-                         "('kernel_y', 'kernel_x'); make it with xbsm.sensor(filter_kernel=...)")
+    if "filter_kernel" not in sensor:
+        raise ValueError("the sensor dataset has no parameter 'filter_kernel'; make it with "
+                         "xbsm.sensor(...)")
+    _kernel(sensor["filter_kernel"])  # an edited kernel: dims, finite, sums to 1
     _check_shared_dims({**sensor.data_vars, **scenario.data_vars}, "sensor and scenario")

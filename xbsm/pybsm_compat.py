@@ -12,6 +12,8 @@ these datasets reproduces pyBSM's numbers.
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 import numpy as np
 import xarray as xr
 
@@ -143,7 +145,7 @@ def sensor(**kw) -> xr.Dataset:
         )
     other_noise = kw.pop("other_noise", None)
     if other_noise is not None:
-        out["other_noise"] = float(np.sqrt(np.sum(np.asarray(other_noise, dtype=float) ** 2)))
+        out["other_noise"] = _other_noise(other_noise)
     other_irradiance = kw.pop("other_irradiance", None)
     if other_irradiance is not None:
         out["stray_irradiance"] = other_irradiance
@@ -155,10 +157,51 @@ def sensor(**kw) -> xr.Dataset:
     for key, value in kw.items():
         if value is not None:
             out[SENSOR_NAMES[key]] = value
-    ds = params.sensor(**out)
+    try:
+        ds = params.sensor(**out)
+    except ValueError as err:
+        raise _in_pybsm_terms(err) from err
     if name is not None:
         ds.attrs["name"] = str(name)
     return ds
+
+
+#: xbsm parameter -> the pyBSM keyword(s) it comes from, where the names differ.
+_PYBSM_KEYWORDS = MappingProxyType({
+    **{ours: theirs for names, specs in ((SENSOR_NAMES, params.SENSOR_SPECS),
+                                         (SCENARIO_NAMES, params.SCENARIO_SPECS))
+       for theirs, ours in names.items() if ours in specs and ours != theirs},
+    "wavelength_min": "opt_trans_wavelengths[0]",
+    "wavelength_max": "opt_trans_wavelengths[-1]",
+    "optics_transmission": "optics_transmission over opt_trans_wavelengths",
+    "quantum_efficiency": "qe over qe_wavelengths",
+    "visibility": "ihaze",
+})
+
+
+def _in_pybsm_terms(err: ValueError) -> ValueError:
+    """``err`` of :func:`xbsm.sensor` / :func:`xbsm.scenario`, naming the pyBSM keyword too."""
+    text = str(err)
+    first = text.split(" ", 1)[0].rstrip(":,;.")
+    if first not in _PYBSM_KEYWORDS:
+        return err
+    return ValueError(f"{text} (pyBSM keyword: {_PYBSM_KEYWORDS[first]})")
+
+
+def _other_noise(values) -> float:
+    """Root-sum-square of pyBSM's ``other_noise`` array, refusing negative entries."""
+    try:
+        array = np.atleast_1d(np.asarray(values, dtype=float))
+    except (TypeError, ValueError):
+        raise ValueError("other_noise must be an array of rms noise values in [0, inf) "
+                         f"electrons; got {values!r:.60}") from None
+    valid = (array >= 0) & np.isfinite(array)
+    if not np.all(valid):
+        bad = float(array[~valid][0])
+        note = " (pyBSM squares each entry: it counted this one as positive)" if bad < 0 else ""
+        raise ValueError(
+            f"other_noise must hold rms noise values in [0, inf) electrons; got {bad!r}{note}")
+    return float(np.sqrt(np.sum(array**2)))
 
 
 def scenario(**kw) -> xr.Dataset:
@@ -198,7 +241,10 @@ def scenario(**kw) -> xr.Dataset:
     out = {"visibility": visibility}
     for key, value in kw.items():
         out[SCENARIO_NAMES[key]] = value
-    ds = params.scenario(**out)
+    try:
+        ds = params.scenario(**out)
+    except ValueError as err:
+        raise _in_pybsm_terms(err) from err
     if name is not None:
         ds.attrs["name"] = str(name)
     return ds

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .. import flags as _flags
 from .._metadata import named
 from .edge import _check_slice
 from .pybsm_numerics import _np_interp_reversed
@@ -41,6 +42,13 @@ def _first_crossing(mtf, freq, threshold):
     return xr.where(any_cross, u, freq.max("frequency"))
 
 
+def _grd_flags(snr: xr.DataArray) -> xr.DataArray:
+    """``grd_unresolved`` where SNR <= 3 or NaN, ``snr_nonpositive`` where SNR <= 0."""
+    flags = _flags.set_flag(_flags.empty_flags(snr), "grd_unresolved", ~(snr > 3.0))
+    flags = _flags.set_flag(flags, "snr_nonpositive", snr <= 0.0)
+    return flags.assign_attrs(_flags.flag_attrs("GRD validity flags"))
+
+
 def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first_crossing"):
     r"""Ground resolved distance: period of the finest resolvable square wave.
 
@@ -64,13 +72,17 @@ def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first
         is resolved); SNR <= 0 gives NaN.
         ``"pybsm"``: pyBSM 0.16.1's rule, ``numpy.interp`` on the reversed MTF
         with frequencies :math:`k\,\Delta f` and a +1e-12 guard; silently
-        wrong for non-monotonic MTFs, kept for parity. SNR <= 0 gives NaN
-        (pyBSM raises).
+        wrong for non-monotonic MTFs, kept for parity. At 0 < SNR <= 3 it gives
+        pyBSM's finite, meaningless value (slant range x 1e12, from its 1e-12
+        guard); SNR <= 0 gives NaN (pyBSM raises).
 
     Returns
     -------
     xr.DataArray
-        GRD. [m]
+        GRD [m], with the coordinate ``grd_flags`` (on the dims of ``snr``;
+        :mod:`xbsm.flags`): ``grd_unresolved`` where SNR <= 3 or NaN (nothing
+        is resolved, whatever the method returns) and ``snr_nonpositive``
+        where SNR <= 0.
 
     Notes
     -----
@@ -107,4 +119,5 @@ def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first
         grd = grd.where(snr > 0)
     else:
         raise ValueError(f"method must be 'first_crossing' or 'pybsm', got {method!r}")
+    grd = grd.assign_coords(grd_flags=_grd_flags(snr))
     return named(grd, "m", "ground resolved distance", references="IBSM Eq. 3-54")
