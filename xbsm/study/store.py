@@ -155,8 +155,9 @@ def _compute_distributed(tasks, scheduler: str, workers: int, progress: bool) ->
                          "pip install \"xbsm[distributed]\"") from None
     with contextlib.ExitStack() as stack:
         if scheduler == "local-cluster":
+            # dashboard on a free port: a busy 8787 makes distributed retry and leak a socket
             cluster = stack.enter_context(LocalCluster(n_workers=workers, threads_per_worker=1,
-                                                       dashboard_address=None))
+                                                       dashboard_address=":0"))
             client = stack.enter_context(Client(cluster))
         else:
             client = stack.enter_context(Client(scheduler))
@@ -225,6 +226,8 @@ def write(result: xr.Dataset, path, *, overwrite: bool = False, scheduler: str =
         ``path`` exists (without ``overwrite``) or its directory is not writable.
     """
     path = check_output(path, overwrite)
+    if not result.chunks:  # an eager Dataset: one chunk
+        result = result.chunk()
     parts = path.with_name(path.name + ".parts")
     try:
         _prepare_parts(result, parts)
