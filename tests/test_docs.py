@@ -15,7 +15,7 @@ from xbsm.methods import Method
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 PAGES = ("index", "guide", "migration", "quirks", "flags", "api", "validation", "study",
-         "example1", "measure")
+         "example1", "measure", "simulate")
 
 # Modules whose public functions docs/api.md must list, one by one.
 API_MODULES = (
@@ -29,6 +29,9 @@ API_MODULES = (
     "xbsm.otf.turbulence", "xbsm.otf.user", "xbsm.otf.wavefront",
     "xbsm.measure.slanted_edge", "xbsm.measure.flat_region",
     "xbsm.study.spec", "xbsm.study.build", "xbsm.study.store", "xbsm.study.goals",
+    "xbsm.simulate.image", "xbsm.simulate.options", "xbsm.simulate.reflectance", "xbsm.simulate.photoelectrons",
+    "xbsm.simulate.sampling", "xbsm.simulate.psf", "xbsm.simulate.pybsm_psf", "xbsm.simulate.convolve",
+    "xbsm.simulate.resample", "xbsm.simulate.camera", "xbsm.simulate.inverse", "xbsm.simulate.labels",
 )
 
 

@@ -7,6 +7,7 @@ Public entry points::
     sc = xbsm.scenario(altitude=..., ground_range=..., visibility=...)
     r = xbsm.snr(s, sc)
     n = xbsm.niirs(s, sc)
+    img = xbsm.simulate_image(image, s, sc, gsd=0.05, seed=0)
 """
 
 __version__ = "0.1.0"  # first: submodules read it while the package initialises
@@ -28,6 +29,7 @@ from .atmosphere import atmosphere_at, open_atmosphere
 from .methods import Method, method
 from .model import niirs, snr, system_otf
 from .params import scenario, sensor
+from .simulate import simulate_image
 
 __all__ = [
     "Method",
@@ -50,4 +52,5 @@ __all__ = [
     "niirs",
     "snr",
     "system_otf",
+    "simulate_image",
 ]

@@ -89,10 +89,36 @@ FLAGS = MappingProxyType({
         "no square wave is resolved; GRD is inf (NaN at SNR <= 0), or pyBSM's finite "
         "slant range x 1e12 with method='pybsm'",
     ),
+    "upsampled": (
+        32768,
+        "simulated image more finely sampled than its reference image (the camera is "
+        "better than the reference): it lacks detail the camera would record",
+    ),
+    "image_nonfinite": (
+        65536,
+        "NaN or infinite pixels in the reference image, set to the image's mean "
+        "reflectance before blurring",
+    ),
+    "image_flat": (
+        131072,
+        "flat reference image: the percentile or min-max reflectance mapping is undefined; "
+        "every pixel maps to the middle of the reflectance range",
+    ),
+    "image_small": (
+        262144,
+        "reference image smaller than the blur kernel or than one output pixel: the "
+        "reflect padding folds the image over itself, borders are not a faithful simulation",
+    ),
+    "reference_unresolved": (
+        524288,
+        "the system OTF exceeds 0.05 at the reference image's Nyquist frequency: the "
+        "reference does not resolve what the camera resolves (the simulation lacks detail)",
+    ),
 })
 
 INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive", "rer_nonpositive",
-           "blur_unresolved", "grd_unresolved")
+           "blur_unresolved", "grd_unresolved", "upsampled", "image_nonfinite", "image_small",
+           "reference_unresolved")
 """Bits saying a number is NaN or may be wrong."""
 
 CALIBRATION = (
@@ -105,11 +131,12 @@ CALIBRATION = (
 )
 """Bits saying a number is outside a GIQE's calibration (or off the NIIRS scale)."""
 
-NOTICE = ("atmosphere_sparse", "well_fill_limited", "partial_spectral_coverage")
+NOTICE = ("atmosphere_sparse", "well_fill_limited", "partial_spectral_coverage",
+          "image_flat")
 """Bits that are neither: information about how a number was obtained."""
 
 INVALID_MASK = sum(FLAGS[name][0] for name in INVALID)
-"""OR of the :data:`INVALID` bits (23169)."""
+"""OR of the :data:`INVALID` bits (907905)."""
 
 CALIBRATION_MASK = sum(FLAGS[name][0] for name in CALIBRATION)
 """OR of the :data:`CALIBRATION` bits (1400)."""

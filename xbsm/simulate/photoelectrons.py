@@ -1,4 +1,4 @@
-"""Image simulation (paper Sec. 4, Eq. 5-6): from scene reflectance to photoelectrons.
+"""Reflectance to photoelectrons: the radiometry an image simulation applies.
 
 The radiometric mapping an image simulation applies to a reflectance map is the
 same chain as :func:`xbsm.snr`'s (paper Eq. 1 and 2), for Lambertian targets of
@@ -10,12 +10,12 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from . import flags as fl
-from . import params, radiometry
-from ._metadata import result
-from .atmosphere import band_atmosphere
-from .methods import method as resolve_method
-from .params import check_inputs
+from .. import flags as fl
+from .. import params, radiometry
+from .._metadata import result
+from ..atmosphere import band_atmosphere
+from ..methods import method as resolve_method
+from ..params import check_inputs
 
 __all__ = ["reflectance_to_photoelectrons"]
 

@@ -1,0 +1,295 @@
+"""``simulate_image``: a reference image seen by a camera in a scenario (paper Eq. 5-6).
+
+``i = R[h (x) o]``: the reference image ``o`` (pixel values) becomes scene
+reflectance, then photoelectrons through the same radiometry as :func:`xbsm.snr`;
+``h`` is the system blur at the reference image's sampling; ``R`` resamples to the
+camera's pixels at the scenario's slant range; then shot, dark, read and
+quantization noise and the ADC. One call broadcasts over a stack of images and
+every sweep dimension of the sensor and scenario; the blur is computed once per
+scenario cell, and dask-backed images stay lazy.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import xarray as xr
+from scipy import fft
+
+from .. import flags as fl
+from .._metadata import named
+from ..otf.system import COMPONENTS as SYSTEM_COMPONENTS
+from ..otf.system import otf_weights
+from ..params import check_inputs
+from . import camera
+from .convolve import blur, blur_by_otf
+from .options import COMPONENTS, ImageMethod, image_method
+from .photoelectrons import reflectance_to_photoelectrons
+from .psf import Optics, kernel_from_otf, kernel_half_width, nyquist_otf, otf_rfft_grid
+from .pybsm_psf import pybsm_psf
+from .reflectance import image_to_reflectance
+from .resample import blur_and_resample, resample, resampling_taps
+from .sampling import sampling
+
+__all__ = ["simulate_image"]
+
+CHANNEL_DIMS = ("band", "channel", "colour", "color")
+"""Dimension names taken as an image's colour channel (percentiles span every channel)."""
+INPUT_DIMS = ("y_input", "x_input")
+
+
+def _as_image(image, channel_dim):
+    """The reference image as a float DataArray over (..., y_input, x_input)."""
+    if isinstance(image, np.ndarray):
+        if image.ndim == 2:
+            image = xr.DataArray(image, dims=("y", "x"))
+        elif image.ndim == 3 and image.shape[-1] in (3, 4):
+            image = xr.DataArray(image, dims=("y", "x", "band"))
+        else:
+            raise ValueError("image must be 2-D (rows, columns), 3-D (rows, columns, 3 or 4 "
+                             f"channels) or a DataArray with dims 'y' and 'x'; got shape "
+                             f"{image.shape}")
+    if not isinstance(image, xr.DataArray):
+        raise ValueError("image must be an xr.DataArray with dims 'y' and 'x' or a numpy "
+                         f"array; got {type(image).__name__}")
+    if "y" not in image.dims or "x" not in image.dims:
+        raise ValueError(f"image must have dims 'y' (rows) and 'x' (columns); got {image.dims}")
+    if image.dtype.kind not in "biuf":
+        raise ValueError(f"image must hold real numbers; got dtype {image.dtype}")
+    if channel_dim is None:
+        channel_dim = next((d for d in CHANNEL_DIMS if d in image.dims), None)
+    elif channel_dim not in image.dims:
+        raise ValueError(f"channel_dim {channel_dim!r} is not a dim of the image {image.dims}")
+    image = image.rename(y="y_input", x="x_input").astype(float)
+    return image.drop_vars([c for c in image.coords if c in INPUT_DIMS]), channel_dim
+
+
+def _reference_gsd(image, gsd):
+    gsd = image.attrs.get("gsd") if gsd is None else gsd
+    if gsd is None:
+        raise ValueError("gsd: give the reference image's ground sample distance as gsd= or "
+                         "image.attrs['gsd'], in (0, inf) m")
+    if isinstance(gsd, xr.DataArray):
+        if set(gsd.dims) & {"y", "x"}:
+            raise ValueError(f"gsd must not vary over 'y' or 'x'; got dims {gsd.dims}")
+        values = gsd.values
+    else:
+        values = np.asarray(gsd, dtype=float)
+        gsd = float(values) if values.ndim == 0 else None
+        if gsd is None:
+            raise ValueError("gsd must be a float or an xr.DataArray with named dims [m]")
+    if not np.all(np.isfinite(values) & (values > 0)):
+        raise ValueError(f"gsd must be in (0, inf) m; got {values!r}")
+    return gsd
+
+
+def _components(components, defocus_radius, sensor, im: ImageMethod):
+    """The OTF components of the blur, and the defocus radii they need."""
+    if components is None:
+        components = (*SYSTEM_COMPONENTS, *(("defocus",) if defocus_radius is not None else ()))
+    components = (components,) if isinstance(components, str) else tuple(components)
+    unknown = [c for c in components if c not in COMPONENTS]
+    if unknown or not components:
+        raise ValueError(f"components must be a non-empty selection of {COMPONENTS}; "
+                         f"got {components!r}")
+    if "defocus" in components and defocus_radius is None:
+        if im.model.name != "pybsm":
+            raise ValueError("defocus_radius (x, y) [rad] must be given with the 'defocus' "
+                             "component (xbsm.otf.defocus gives it from a focus error)")
+        # pyBSM's DefocusSimulator takes the detector widths as blur radii
+        defocus_radius = (sensor["detector_width_x"], sensor["detector_width_y"])
+    if defocus_radius is not None:
+        pair = isinstance(defocus_radius, tuple | list)
+        defocus_radius = tuple(defocus_radius) if pair else (defocus_radius, defocus_radius)
+        values = [np.asarray(getattr(r, "values", r), dtype=float) for r in defocus_radius]
+        if len(values) != 2 or not all(np.all(np.isfinite(v) & (v >= 0)) for v in values):
+            raise ValueError("defocus_radius must be one radius or a pair (x, y) in [0, inf) "
+                             f"rad; got {defocus_radius!r}")
+    return components, defocus_radius
+
+
+def _optics(sensor, scenario, radiometry, samp, im: ImageMethod, components, radius, digital):
+    """The inputs of the blur kernel."""
+    time = (radiometry["effective_integration_time"] if im.integration_time == "effective"
+            else sensor["integration_time"])
+    # a filter kernel in the blur acts on the camera's pixels, pitch / focal length (pyBSM)
+    pixel_angle = (sensor["pixel_pitch_x"] / sensor["focal_length"],
+                   sensor["pixel_pitch_y"] / sensor["focal_length"])
+    kept = tuple(c for c in components if not (digital and c == "filter"))
+    return Optics(sensor, scenario, otf_weights(radiometry["spectral_weights"]), time,
+                  samp["slant_range"], im.model, kept, radius, pixel_angle)
+
+
+def _camera_image(images: dict, optics: Optics, samp, gsd, shape, im: ImageMethod):
+    """The blurred image on the camera's pixels, the kernel, and the flags the blur sets.
+
+    The accurate path blurs and resamples the reflectance (both are affine-preserving:
+    weights and kernel sum to one) and scales to photoelectrons last; pyBSM's path
+    blurs the photoelectrons, as its zero-padded zoom is not affine-preserving.
+    """
+    angle = samp["reference_angle"]
+    taps = resampling_taps(samp, shape, im.resampling)
+    if im.psf == "pybsm":
+        psf = pybsm_psf(optics, 2 * np.arctan(gsd / 2 / samp["slant_range"]))
+        small = (np.abs(psf) > 0).any("psf_x").sum("psf_y") > min(shape)
+        out = resample(blur(images["ideal"], psf, im.convolution), taps,
+                       single=im.resampling == "pil")
+    else:
+        half, small = kernel_half_width(optics, angle, shape)
+        size_y, size_x = (fft.next_fast_len(n + 2 * half, real=True) for n in shape)
+        otf = otf_rfft_grid(optics, angle, size_y, size_x)
+        psf = kernel_from_otf(otf, size_x, half)
+        if im.convolution == "fft" and im.resampling in ("cubic", "area", "none"):
+            out = blur_and_resample(images["reflectance"], otf, half, size_x, taps)
+            out = images["offset"] + images["gain"] * out
+        elif im.convolution == "fft":
+            out = resample(blur_by_otf(images["ideal"], otf, half, size_x), taps,
+                           single=im.resampling == "pil")
+        else:  # a kernel convolution: the window of the kernel, normalised
+            out = resample(blur(images["ideal"], psf / psf.sum(("psf_y", "psf_x")),
+                                im.convolution), taps, single=im.resampling == "pil")
+    flags = fl.set_flag(fl.empty_flags(), "image_small", small)
+    flags = fl.set_flag(flags, "reference_unresolved", nyquist_otf(optics, angle) > 0.05)
+    return out, psf, flags
+
+
+def _digital(sensor, components, im: ImageMethod) -> bool:
+    kernel = sensor["filter_kernel"]
+    identity = kernel.shape == (1, 1) and float(kernel[0, 0]) == 1.0
+    return ("filter" in components and not identity and im.filter_stage == "digital"
+            and im.resampling != "none")
+
+
+def _warn_upsampled(samp) -> None:
+    upsampled = fl.has_flag(samp["flags"], "upsampled")
+    if bool(upsampled.any()):
+        warnings.warn(
+            f"{int(upsampled.sum())} of {upsampled.size} simulated images are more finely "
+            "sampled than the reference image (flag 'upsampled'): the camera is better than "
+            "the reference, so they lack detail it would record", UserWarning, stacklevel=3)
+
+
+def _pixel_coords(ds: xr.Dataset) -> xr.Dataset:
+    coords = {}
+    for dim, what in (("y", "row of the simulated image"), ("x", "column of the simulated image"),
+                      ("y_input", "row of the reference image"),
+                      ("x_input", "column of the reference image")):
+        if dim in ds.dims:
+            coords[dim] = (dim, np.arange(ds.sizes[dim]), {"units": "1", "long_name": what})
+    return ds.assign_coords(coords)
+
+
+def _assemble(images: dict, samp, radiometry, psf, flags, im: ImageMethod, attrs: dict):
+    """The result Dataset: images, kernel, pixel map and flags, each labelled."""
+    count = "count"
+    out = xr.Dataset({
+        "reflectance": images["reflectance"],
+        "ideal": named(images["ideal"], count, "ideal image in photoelectrons (reference "
+                       "sampling)"),
+        "blurred": named(images["blurred"], count, "blurred image in photoelectrons"),
+        "noisy": named(images["noisy"], count, "noisy image in photoelectrons"),
+        "counts": images["counts"],
+        "psf": psf,
+        **{name: samp[name] for name in ("gsd", "gsd_x", "gsd_y", "slant_range", "scale_y",
+                                          "scale_x", "offset_y", "offset_x", "size_y",
+                                          "size_x")},
+        "photoelectron_offset": named(images["offset"], count, "photoelectrons at reflectance 0"),
+        "photoelectron_gain": named(images["gain"], count, "photoelectrons per unit "
+                                    "reflectance"),
+        "effective_integration_time": radiometry["effective_integration_time"],
+        "flags": flags.astype(np.int32).assign_attrs(fl.flag_attrs(
+            "image simulation validity flags")),
+    }, attrs={"method": im.describe(), **attrs})
+    return _pixel_coords(out)
+
+
+def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None, seed=None,
+                   noise=True, method="accurate", components=None, reflectance=None,
+                   reflectance_range=(0.05, 0.95), convolution=None, resampling=None,
+                   basis=None, defocus_radius=None, channel_dim=None) -> xr.Dataset:
+    """A reference image as the camera would record it in the scenario (paper Eq. 5-6).
+
+    Parameters
+    ----------
+    image : xr.DataArray or np.ndarray
+        Reference image(s): dims ``y`` (rows) and ``x`` (columns), optionally a colour
+        channel (``band``, ``channel``, ``colour`` or ``color``, or ``channel_dim``) and any
+        leading dims (a stack). A numpy array is (rows, columns) or (rows, columns, 3|4).
+        Dask-backed images stay lazy. [any: pixel values, see ``reflectance``]
+    sensor, scenario : xr.Dataset
+        From :func:`xbsm.sensor` and :func:`xbsm.scenario`; sweep dims broadcast (the
+        parameters are evaluated when called: they set the output sizes).
+    gsd : float or xr.DataArray, optional
+        Ground sample distance of the reference image; default ``image.attrs["gsd"]``. [m]
+    seed : int, optional
+        Noise seed (one independent stream per image); ``None``: fresh entropy, recorded
+        in the result's ``seed`` attribute.
+    noise : bool
+        Add shot, dark-current, read and other noise (``noisy`` equals ``blurred`` if not).
+    method : str, Method or ImageMethod
+        "accurate" (default), "fast", "pybsm" (pyBSM 0.16.1's noiseless outputs, quirks
+        included) or :func:`xbsm.simulate.image_method` with knobs.
+    components : sequence of str, optional
+        OTF components of the blur (``xbsm.simulate.options.COMPONENTS``); default the
+        system OTF (plus "defocus" when ``defocus_radius`` is given). One component alone
+        is pyBSM's ``JitterSimulator``, ``DetectorSimulator``, ... (``PYBSM_SIMULATORS``).
+    reflectance : {"percentile", "minmax", "identity"} or (pixel_values, reflectances)
+        Pixel values to reflectance (:func:`xbsm.simulate.image_to_reflectance`); default
+        the method's ("percentile").
+    reflectance_range : (float, float)
+        Reflectances of the two pixel values of "percentile" and "minmax". [1]
+    convolution, resampling, basis : str, optional
+        Override the method's knobs (:class:`xbsm.simulate.ImageMethod`).
+    defocus_radius : float or (float, float), optional
+        1/e radii of a Gaussian defocus OTF along x and y. [rad]
+    channel_dim : str, optional
+        The colour dim, if not one of the usual names.
+
+    Returns
+    -------
+    xr.Dataset
+        ``reflectance`` [1] and ``ideal`` [count] on (``y_input``, ``x_input``), the
+        reference grid; ``blurred``, ``noisy`` [count] and ``counts`` [1] on (``y``,
+        ``x``), the camera's pixels, NaN past each scenario's ``size_y`` x ``size_x``;
+        ``psf`` (the blur kernel at the reference sampling) [1]; the pixel map
+        ``scale_*``, ``offset_*`` (:func:`xbsm.simulate.transform_points`); ``gsd``,
+        ``gsd_x``, ``gsd_y``, ``slant_range`` [m]; ``photoelectron_offset``,
+        ``photoelectron_gain`` [count]; ``effective_integration_time`` [s]; ``flags``
+        (radiometry, ``upsampled`` with one warning per call, ``image_small``,
+        ``image_nonfinite``, ``image_flat``, ``reference_unresolved``).
+    """
+    check_inputs(sensor, scenario)
+    im = image_method(method, convolution=convolution, resampling=resampling, basis=basis,
+                      reflectance=reflectance if isinstance(reflectance, str) else None)
+    img, channel = _as_image(image, channel_dim)
+    gsd = _reference_gsd(img, gsd)
+    shape = (img.sizes["y_input"], img.sizes["x_input"])
+    mapping = im.reflectance if reflectance is None or isinstance(reflectance, str) else reflectance
+    mapped = image_to_reflectance(img, mapping, reflectance_range,
+                                  dims=[*([channel] if channel else []), *INPUT_DIMS])
+    radiometry = reflectance_to_photoelectrons(sensor, scenario, reflectance=[0.0, 1.0],
+                                               method=im.model)
+    samp = sampling(sensor, scenario, gsd, shape, im)
+    comps, radius = _components(components, defocus_radius, sensor, im)
+    digital = _digital(sensor, comps, im)
+    optics = _optics(sensor, scenario, radiometry, samp, im, comps, radius, digital)
+    pe = radiometry["photoelectrons"]
+    offset, gain = pe.isel(reflectance=0, drop=True), (pe.isel(reflectance=-1, drop=True)
+                                                       - pe.isel(reflectance=0, drop=True))
+    images = dict(reflectance=mapped["reflectance"], offset=offset, gain=gain,
+                  ideal=offset + gain * mapped["reflectance"])
+    blurred, psf, psf_flags = _camera_image(images, optics, samp, gsd, shape, im)
+    entropy = camera.seed_entropy(seed)
+    noisy = (camera.add_noise(blurred, sensor, seed=entropy, quantization=im.quantization)
+             if noise else blurred)
+    if digital:
+        blurred, noisy = (camera.digital_filter(a, sensor["filter_kernel"], samp["size_y"],
+                                                samp["size_x"]) for a in (blurred, noisy))
+    flags = radiometry["flags"] | samp["flags"] | psf_flags | mapped["flags"]
+    _warn_upsampled(samp)
+    images.update(blurred=blurred, noisy=noisy,
+                  counts=camera.digitize(noisy, sensor, im.quantization))
+    return _assemble(images, samp, radiometry, psf, flags, im, {
+        "seed": str(entropy), "noise": "on" if noise else "off",
+        "components": " ".join(comps), "reference_gsd": str(gsd)})
