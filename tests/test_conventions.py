@@ -528,7 +528,8 @@ def test_giqe_references_cite_each_version_once():
 # ---- module-level tables are immutable ------------------------------------------------
 
 _TABLE_MODULES = ("xbsm.atmosphere", "xbsm.examples", "xbsm.geometry", "xbsm.noise",
-                  "xbsm.plot", "xbsm.quadrature", "xbsm.radiometry", "xbsm.units",
+                  "xbsm.plot", "xbsm.plot._style", "xbsm.quadrature", "xbsm.radiometry",
+                  "xbsm.units", "xbsm.study.goals",
                   "xbsm.metrics.edge", "xbsm.metrics.giqe", "xbsm.metrics.grd",
                   *(f"xbsm.otf.{m}" for m in ("aperture", "defocus", "detector", "filters",
                                               "motion", "psf", "spectral", "system",

@@ -23,15 +23,16 @@ API_MODULES = (
     "xbsm.atmosphere",
     "xbsm.geometry", "xbsm.radiometry", "xbsm.noise", "xbsm.quadrature", "xbsm.metrics",
     "xbsm.metrics.edge", "xbsm.metrics.grd", "xbsm.metrics.giqe", "xbsm.metrics.pybsm_numerics",
-    "xbsm.flags", "xbsm.examples", "xbsm.plot", "xbsm.cli",
+    "xbsm.flags", "xbsm.examples", "xbsm.plot.axes", "xbsm.plot.figures", "xbsm.cli",
     "xbsm.otf.aperture", "xbsm.otf.defocus", "xbsm.otf.detector", "xbsm.otf.filters",
     "xbsm.otf.motion", "xbsm.otf.psf", "xbsm.otf.spectral", "xbsm.otf.system",
     "xbsm.otf.turbulence", "xbsm.otf.user", "xbsm.otf.wavefront",
     "xbsm.measure.slanted_edge", "xbsm.measure.flat_region",
     "xbsm.study.spec", "xbsm.study.build", "xbsm.study.store", "xbsm.study.goals",
-    "xbsm.simulate.image", "xbsm.simulate.options", "xbsm.simulate.reflectance", "xbsm.simulate.photoelectrons",
-    "xbsm.simulate.sampling", "xbsm.simulate.psf", "xbsm.simulate.pybsm_psf", "xbsm.simulate.convolve",
-    "xbsm.simulate.resample", "xbsm.simulate.camera", "xbsm.simulate.inverse", "xbsm.simulate.labels",
+    *(f"xbsm.simulate.{m}" for m in (
+        "image", "options", "reflectance", "photoelectrons", "sampling", "psf", "pybsm_psf",
+        "convolve", "resample", "camera", "inverse", "labels",
+    )),
 )
 
 

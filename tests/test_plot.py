@@ -1,4 +1,4 @@
-"""xbsm.plot.standard_figures: the files it writes and what the figures show."""
+"""xbsm.plot: the standard figures' files and what they show, and the range-performance axes."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import xarray as xr
 
 import xbsm.study as st
 from xbsm import flags, plot
+from xbsm.plot import figures as plot_figures
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"  # PNG specification (ISO/IEC 15948), Sec. 5.2
 
@@ -46,13 +47,13 @@ def _draw(ds, directory, render=False):
     inspected, not their pixels; rendering is what takes the time).
     """
     figures = {}
-    original = plot._png
+    original = plot_figures._png
     with pytest.MonkeyPatch.context() as mp:
         def keep(fig):
             figures[len(figures)] = fig
             return original(fig) if render else b"not rendered"
 
-        mp.setattr(plot, "_png", keep)
+        mp.setattr(plot_figures, "_png", keep)
         paths = plot.standard_figures(ds, directory)
     return paths, {path.name: figures[i] for i, path in enumerate(paths)}
 
@@ -217,7 +218,7 @@ def test_dimension_left_over_is_refused_by_name(result, tmp_path):
 
 def test_interrupted_write_keeps_the_previous_file_and_no_temporary(result, tmp_path,
                                                                     monkeypatch):
-    monkeypatch.setattr(plot, "_png", lambda fig: b"not rendered")
+    monkeypatch.setattr(plot_figures, "_png", lambda fig: b"not rendered")
     old = tmp_path / "figure2_niirs_giqe4.png"
     old.write_bytes(b"previous figure")
     calls = []
@@ -228,8 +229,8 @@ def test_interrupted_write_keeps_the_previous_file_and_no_temporary(result, tmp_
             raise KeyboardInterrupt
         return original(path, mode)
 
-    original = plot.os.chmod
-    monkeypatch.setattr(plot.os, "chmod", interrupt_second)
+    original = plot_figures.os.chmod
+    monkeypatch.setattr(plot_figures.os, "chmod", interrupt_second)
     with pytest.raises(KeyboardInterrupt):
         plot.standard_figures(result[["niirs", "flags"]], tmp_path)
     monkeypatch.undo()
@@ -247,3 +248,138 @@ def test_rejects_what_it_cannot_draw(result, tmp_path):
     mtf.attrs = {}
     with pytest.raises(ValueError, match="frequency coordinate"):
         plot.standard_figures(mtf, tmp_path)
+
+
+# ---- range_performance ---------------------------------------------------------------------
+
+# Olson camera (nir), 6 ground ranges x 3 focal lengths x 2 visibilities. GIQE 5 NIIRS of this
+# study (xbsm.niirs, 'accurate'): at 23 km visibility it falls from 6.1-6.9 at 40 km to
+# 4.38 / 4.90 / 4.25 at 80 km for f = 2 / 4 / 8 m; at 5 km visibility it is at most 3.2 from
+# 40 km on. A requirement of NIIRS >= 4.5 thus has an exact crossing (f = 2 m), one still met
+# at the grid's last range (f = 4 m) and a visibility that never meets it.
+RANGE_STUDY = """
+[sensor]
+preset = "olson"
+band = "nir"
+[scenario]
+altitude = 9000.0
+platform_speed = 100.0
+[sweep]
+ground_range = [40000.0, 45000.0, 50000.0, 60000.0, 70000.0, 80000.0]
+focal_length = [2.0, 4.0, 8.0]
+visibility = [23.0, 5.0]
+"""
+
+
+@pytest.fixture(scope="module")
+def range_niirs():
+    ds = st.run(st.parse(RANGE_STUDY)).compute()
+    return ds.niirs.sel(giqe=5), ds.flags.sel(giqe=5)
+
+
+@pytest.fixture(scope="module")
+def goal(range_niirs):
+    niirs, bits = range_niirs
+    bits = bits.copy()
+    cell = {"focal_length": 2, "visibility": 0, "ground_range": 4}  # f = 8 m, 23 km, 70 km
+    bits[cell] = bits[cell] | flags.flag("snr_nonpositive")  # an invalid cell ends the search
+    out = st.max_range(niirs, 4.5, flags=bits)
+    # precondition (from the NIIRS values above): exact, grid edge, invalid cell; never meets
+    assert out.goal_flags.sel(visibility=23.0).values.tolist() == [0, 2, 4]
+    assert out.goal_flags.sel(visibility=5.0).values.tolist() == [1, 1, 1]
+    return out
+
+
+def _new_axes():
+    from matplotlib.figure import Figure
+
+    return Figure(layout="constrained").subplots()
+
+
+def _open_markers(ax) -> dict:
+    """{marker: (x, y)} of the lines drawn with white-filled markers (the bounds)."""
+    from matplotlib.colors import to_rgba
+
+    return {line.get_marker(): (list(line.get_xdata()), list(line.get_ydata()))
+            for line in ax.get_lines() if line.get_linestyle() == "None"
+            and to_rgba(line.get_markerfacecolor()) == (1.0, 1.0, 1.0, 1.0)
+            and len(line.get_xdata())}
+
+
+def _arrows(ax) -> list:
+    from matplotlib.text import Annotation
+
+    return [a for a in ax.texts if isinstance(a, Annotation) and a.arrow_patch is not None]
+
+
+def test_range_performance_labels_axes_with_units_and_the_threshold(goal):
+    import io
+
+    ax = plot.range_performance(goal, ax=_new_axes())
+    assert ax.get_xlabel() == "focal length [m]"  # x: the first dimension of max_range
+    assert ax.get_ylabel() == "longest ground range [km]"
+    assert ax.get_title() == "Longest ground range with NIIRS (GIQE 5) \u2265 4.5"
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert legend[:2] == ["visibility = 23\u00a0km", "visibility = 5\u00a0km"]  # hue: the other
+    ax.figure.savefig(io.BytesIO(), format="png")  # renders, no warning (the glyphs exist)
+
+
+def test_range_performance_draws_exact_answers_in_km_one_line_per_hue(goal):
+    ax = plot.range_performance(goal, ax=_new_axes())
+    solid = [line for line in ax.get_lines() if line.get_linestyle() == "-"]
+    assert len(solid) == 2  # one per visibility
+    x, y = np.asarray(solid[0].get_xdata(), float), np.asarray(solid[0].get_ydata(), float)
+    assert x.tolist() == [2.0, 4.0, 8.0]  # the focal lengths swept [m]
+    # the exact crossing is max_range's own answer in km; NIIRS passes 4.5 between 70 and 80 km
+    exact = float(goal.max_range.sel(focal_length=2.0, visibility=23.0)) / 1e3
+    assert y[0] == pytest.approx(exact, rel=1e-12) and 70.0 < y[0] < 80.0
+    assert np.isnan(y[1:]).all()  # the two bounds are not on the solid line
+
+
+def test_range_performance_draws_bounds_open_with_an_arrow_up(goal):
+    ax = plot.range_performance(goal, ax=_new_axes())
+    markers = _open_markers(ax)
+    # bound_at_grid_edge: f = 4 m still meets NIIRS 4.5 at the last range swept, 80 km
+    assert markers["o"] == ([4.0], [80.0])
+    # invalid_cell: f = 8 m is known good only up to 60 km, the range before the invalid cell
+    assert markers["s"] == ([8.0], [60.0])
+    arrows = _arrows(ax)
+    assert sorted(a.xy for a in arrows) == [(4.0, 80.0), (8.0, 60.0)]
+    assert all(a.xyann[1] > 0 for a in arrows)  # up: the true range is at least this
+    top = ax.get_ylim()[1]
+    assert top > 80.0  # room for the arrow above the highest bound
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "lower bound \u2191: still met at the longest range swept" in legend
+    assert "lower bound \u2191: an invalid model cell ended the search" in legend
+
+
+def test_range_performance_leaves_out_cells_that_never_meet_and_names_them(goal):
+    ax = plot.range_performance(goal, ax=_new_axes())
+    orange = [line for line in ax.get_lines() if line.get_color() == "tab:orange"]
+    assert orange and all(np.isnan(np.asarray(line.get_ydata(), float)).all()
+                          for line in orange)  # 5 km visibility: nothing drawn
+    note = [t.get_text() for t in ax.get_legend().get_texts()][-1].replace("\n", " ")
+    assert note == ("never meets the requirement (not drawn): visibility = 5\u00a0km at "
+                    "2\u00a0m, 4\u00a0m, 8\u00a0m")
+
+
+def test_range_performance_of_min_parameter_points_bounds_down(range_niirs):
+    niirs, bits = range_niirs
+    smallest = st.min_parameter(niirs, 4.5, "focal_length", flags=bits)
+    # precondition: f = 2 m (the first swept) already meets 4.5 at 23 km out to 70 km
+    assert smallest.goal_flags.sel(visibility=23.0).values.tolist()[:5] == [2] * 5
+    ax = plot.range_performance(smallest, x="ground_range", ax=_new_axes())
+    assert ax.get_xlabel() == "ground range [km]"
+    assert ax.get_ylabel() == "smallest focal length [m]"
+    arrows = _arrows(ax)
+    assert len(arrows) == 5 and all(a.xyann[1] < 0 for a in arrows)  # the answer is at most
+
+
+def test_range_performance_refuses_what_it_cannot_draw(goal, range_niirs):
+    with pytest.raises(ValueError, match="goal must be the Dataset"):
+        plot.range_performance(range_niirs[0].to_dataset(), ax=_new_axes())
+    with pytest.raises(ValueError, match="x must be one of"):
+        plot.range_performance(goal, x="ground_range", ax=_new_axes())
+    extra = xr.concat([goal] * 2, dim=xr.DataArray([1.0, 2.0], dims="altitude"))
+    with pytest.raises(ValueError, match="dimension 'altitude' besides"):
+        plot.range_performance(extra, x="focal_length", hue="visibility", ax=_new_axes())
