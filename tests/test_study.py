@@ -7,6 +7,7 @@ import xarray as xr
 from scipy.stats import norm
 
 import xbsm
+import xbsm.cli
 from xbsm import study
 from xbsm.examples import olson_scenario, olson_sensor
 from xbsm.study import store
@@ -212,3 +213,20 @@ def test_probability_meets_is_the_normal_cdf():
     assert float(p[0]) == 0.5
     with pytest.raises(ValueError, match="standard_error"):
         study.probability_meets(niirs, 5.0, standard_error=0.0)
+
+
+def test_default_study_layout_with_pybsm_numerics_reproduces_pybsm():
+    # Example 1's study (both bands, both visibilities) with method "pybsm" at two points
+    # of pybsm_test_cases.md computed with pyBSM 0.16.1: A5 (NIR, 23 km visibility = ihaze 1,
+    # 20 km ground range) and A6 (red, 5 km visibility = ihaze 2, nadir)
+    text = xbsm.cli.default_study_path().read_text()
+    text = text.replace('ground_range = "database"', "ground_range = [0.0, 20000.0]")
+    text = text.replace('preset = "accurate"', 'preset = "pybsm"')
+    text = text.replace('include = ["niirs", "mtf"]', 'include = ["niirs"]').replace(
+        "mtf_frequency", "# mtf_frequency")
+    result = study.run(study.parse(text)).compute()
+    a5 = result.niirs.sel(band="nir", visibility=23.0, ground_range=20e3)
+    a6 = result.niirs.sel(band="red", visibility=5.0, ground_range=0.0)
+    for point, expected in ((a5, (8.180362337723714, 6.990223083421799, 8.252057802116985)),
+                            (a6, (9.522427179922438, 8.895972852352036, 9.802914580025174))):
+        np.testing.assert_allclose(point.values, expected, rtol=0, atol=1e-8)
