@@ -24,6 +24,7 @@ from .. import __version__, model, params
 from ..methods import method as make_method
 from .spec import SCENARIO_PARAMETERS, SENSOR_PARAMETERS, Study
 
+
 def chunk_sizes(study: Study) -> dict[str, int]:
     """Chunk length along every study dimension.
 
@@ -105,14 +106,11 @@ def _outputs(block: xr.Dataset, study: Study) -> xr.Dataset:
     return xr.concat(parts, dim="band", coords="minimal") if study.bands else parts[0]
 
 
-def _block(block: xr.Dataset, study: Study, template: xr.Dataset) -> xr.Dataset:
-    """One chunk of the result, laid out exactly as the template."""
+def _block(block: xr.Dataset, study: Study, layout: dict, extra: dict) -> xr.Dataset:
+    """One chunk of the result: every variable on the dims ``layout`` gives it."""
     out = _outputs(block, study)
-    variables = {name: out[name].transpose(*var.dims).variable
-                 for name, var in template.data_vars.items()}
-    coords = {name: template[name].variable for name in template.coords
-              if name not in block.coords and name not in block.dims}
-    return xr.Dataset(variables, coords={**block.coords, **coords}, attrs=template.attrs)
+    variables = {name: out[name].transpose(*dims).variable for name, dims in layout.items()}
+    return xr.Dataset(variables, coords={**block.coords, **extra})
 
 
 def _inputs(study: Study, chunks: dict) -> xr.Dataset:
@@ -158,7 +156,10 @@ def run(study: Study) -> xr.Dataset:
     chunks = chunk_sizes(study)
     inputs = _inputs(study, chunks)
     template = _template(study, inputs, chunks)
-    result = xr.map_blocks(_block, inputs, args=(study, template), template=template)
+    layout = {name: var.dims for name, var in template.data_vars.items()}
+    extra = {name: (coord.dims, coord.values, coord.attrs)
+             for name, coord in template.coords.items() if name not in inputs.coords}
+    result = xr.map_blocks(_block, inputs, args=(study, layout, extra), template=template)
     return result.assign_attrs(_provenance(study))
 
 

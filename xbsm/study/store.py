@@ -24,8 +24,8 @@ import sys
 from pathlib import Path
 
 import dask
-import dask.diagnostics
 import dask.array as dsa
+import dask.diagnostics
 import numpy as np
 import xarray as xr
 
@@ -149,7 +149,8 @@ def _compute_missing(result: xr.Dataset, parts: Path, scheduler: str, workers: i
 def _compute_distributed(tasks, scheduler: str, workers: int, progress: bool) -> None:
     """Run the chunk tasks on a dask.distributed cluster (a LocalCluster or an address)."""
     try:
-        from dask.distributed import Client, LocalCluster, progress as show_progress
+        from dask.distributed import Client, LocalCluster
+        from dask.distributed import progress as show_progress
     except ImportError:
         raise StudyError("scheduler " + repr(scheduler) + " needs dask.distributed: "
                          "pip install \"xbsm[distributed]\"") from None
