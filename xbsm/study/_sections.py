@@ -1,0 +1,163 @@
+"""The set-up tables of a study file: [sensor] and [bands], [method], [outputs], [run].
+
+[scenario] holds plain parameters (``_values``); [sweep] is read in ``spec``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from types import MappingProxyType
+
+import numpy as np
+
+from .. import examples, params
+from ..methods import PRESETS
+from ..methods import method as make_method
+from ._source import Source, section, shown, suggestion, unknown_name
+from ._values import BAND_PARAMETERS, SENSOR_PARAMETERS, fixed_parameters, sweep_values
+
+__all__ = ["OUTPUT_GROUPS", "SCHEDULERS", "SENSOR_PRESETS", "method_and_knobs",
+           "outputs_and_frequency", "run_options", "sensor_and_bands"]
+
+#: Built-in sensors a study may start from (``[sensor] preset``), with their bands.
+SENSOR_PRESETS = MappingProxyType({"olson": tuple(examples.OLSON_BANDS)})
+OUTPUT_GROUPS = ("niirs", "mtf")
+SCHEDULERS = ("threads", "synchronous", "local-cluster")
+
+
+def _preset_bands(src: Source, preset: str, band) -> list:
+    """The band names ``[sensor] band`` chooses from the preset sensor (default: nir)."""
+    known = SENSOR_PRESETS[preset]
+    names = [band] if isinstance(band, str) else ["nir"] if band is None else band
+    if (not isinstance(names, list) or not names or len(set(map(str, names))) != len(names)
+            or not all(isinstance(name, str) for name in names)):
+        raise src.error("sensor", "band", "must be a band name or a list of different band "
+                        f"names of the {preset} sensor ({', '.join(known)}); got {shown(band)}")
+    for name in names:
+        if name not in known:
+            raise src.error("sensor", "band", f"unknown band {name!r} of the {preset} sensor; "
+                            f"allowed: {', '.join(known)}")
+    return names
+
+
+def _preset(src: Source, table: dict) -> tuple[dict, dict]:
+    """The preset sensor's parameters and, for a list of bands, each band's own ones."""
+    preset, band = table.get("preset"), table.get("band")
+    if preset is None:
+        if band is not None:
+            raise src.error("sensor", "band", 'a named band needs a sensor preset (preset = '
+                            '"olson"); otherwise give the bands as [bands.NAME] tables')
+        return {}, {}
+    if not isinstance(preset, str) or preset not in SENSOR_PRESETS:
+        raise src.error("sensor", "preset", unknown_name("sensor preset", preset, SENSOR_PRESETS))
+    names = _preset_bands(src, preset, band)
+    if not isinstance(band, list):
+        return examples.olson_sensor_parameters(names[0]), {}
+    for key in BAND_PARAMETERS:
+        if key in table:
+            raise src.error("sensor", key, f"is set per band by band = {shown(band)} (the "
+                            f"{preset} preset); remove it, or give the bands as [bands.NAME] "
+                            "tables")
+    # the file's quantum_efficiency, if any, overrides each band's (as any preset value)
+    per_band = [*BAND_PARAMETERS] + ([] if "quantum_efficiency" in table
+                                     else ["quantum_efficiency"])
+    bands = {name: {k: v for k, v in examples.olson_sensor_parameters(name).items()
+                    if k in per_band} for name in names}
+    return examples.olson_sensor_parameters(names[0]), bands
+
+
+def sensor_and_bands(src: Source, doc: dict) -> tuple[dict, dict]:
+    """Sensor parameters (preset first, then the file's) and the bands, if any."""
+    table = section(src, doc, "sensor")
+    base, bands = _preset(src, table)
+    base.update(fixed_parameters(src, table, "sensor", SENSOR_PARAMETERS))
+    custom = section(src, doc, "bands")
+    if custom and bands:
+        raise src.error("bands", None, "give bands either as [sensor] band = [...] or as "
+                        "[bands.NAME] tables, not both")
+    for name, values in custom.items():
+        if not isinstance(values, dict):
+            raise src.error("bands", name, "each band is a table [bands.NAME] of sensor "
+                            f"parameters (wavelength_min, wavelength_max, ...); got "
+                            f"{shown(values)}")
+        bands[name] = fixed_parameters(src, values, f"bands.{name}", SENSOR_PARAMETERS)
+    return base, bands
+
+
+def method_and_knobs(src: Source, doc: dict) -> tuple[str, dict]:
+    """Method preset and knob overrides, each checked as :func:`xbsm.method` does."""
+    knobs = dict(section(src, doc, "method"))
+    preset = knobs.pop("preset", "accurate")
+    if not isinstance(preset, str) or preset not in PRESETS:
+        raise src.error("method", "preset", unknown_name("method preset", preset, PRESETS))
+    known = {f.name for f in dataclasses.fields(PRESETS[preset])} - {"name", "constants"}
+    for key, value in knobs.items():
+        if key not in known:
+            raise src.error("method", key, f"unknown method knob; {suggestion(key, known)}")
+        try:
+            make_method(preset, **{key: value})
+        except (TypeError, ValueError) as err:
+            raise src.error("method", key, str(err)) from None
+    return preset, knobs
+
+
+def outputs_and_frequency(src: Source, doc: dict) -> tuple[tuple, np.ndarray | None]:
+    """Output groups (``niirs`` always; ``mtf`` with its frequency grid)."""
+    table = section(src, doc, "outputs", ("include", "mtf_frequency"))
+    include = table.get("include", ["niirs"])
+    if not isinstance(include, list) or not include or not all(
+            isinstance(x, str) for x in include):
+        raise src.error("outputs", "include", f"must be a non-empty list from "
+                        f"{list(OUTPUT_GROUPS)}; got {shown(include)}")
+    for name in include:
+        if name not in OUTPUT_GROUPS:
+            raise src.error("outputs", "include", f"unknown output {name!r}; "
+                            f"{suggestion(name, OUTPUT_GROUPS)}")
+    frequency = None
+    if "mtf" in include:
+        if "mtf_frequency" not in table:
+            raise src.error("outputs", "include", "the mtf output needs mtf_frequency = "
+                            "{start, stop, num} or a list (cycles/rad) in [outputs]")
+        frequency = sweep_values(src, "outputs", "mtf_frequency", table["mtf_frequency"])
+        if np.any(frequency < 0) or len(frequency) > params.MAX_FREQUENCIES:
+            raise src.error("outputs", "mtf_frequency", "must hold at most "
+                            f"{params.MAX_FREQUENCIES} frequencies, each >= 0 cycles/rad; got "
+                            f"{len(frequency)} from {frequency.min():g}")
+    elif "mtf_frequency" in table:
+        raise src.error("outputs", "mtf_frequency", 'given without "mtf" in include; add '
+                        '"mtf" to include or remove mtf_frequency')
+    return tuple(dict.fromkeys(["niirs", *include])), frequency
+
+
+def _whole(src: Source, key: str, value, name: str | None = None) -> None:
+    """An error unless ``value`` is a whole number >= 1 (``name``: the chunked dimension)."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise src.error("run", key, f"{name + ' ' if name else ''}must be a whole number >= 1;"
+                        f" got {shown(value)}")
+
+
+def run_options(src: Source, doc: dict, dims) -> dict:
+    """Chunking, scheduler, workers and the default output path."""
+    table = section(src, doc, "run", ("chunk_scenarios", "chunks", "scheduler", "workers",
+                                      "output"))
+    out = dict(chunk_scenarios=table.get("chunk_scenarios", 20_000),
+               chunks=table.get("chunks", {}), scheduler=table.get("scheduler", "threads"),
+               workers=table.get("workers", 2), output=table.get("output"))
+    for key in ("chunk_scenarios", "workers"):
+        _whole(src, key, out[key])
+    if not isinstance(out["chunks"], dict):
+        raise src.error("run", "chunks", "must be a table {dimension = chunk length}; got "
+                        f"{shown(out['chunks'])}")
+    for dim, size in out["chunks"].items():
+        if dim not in dims:
+            raise src.error("run", "chunks", f"unknown dimension {dim!r}; "
+                            f"{suggestion(dim, dims) if dims else 'the study has no dimensions'}")
+        _whole(src, "chunks", size, dim)
+    scheduler = out["scheduler"]
+    if not isinstance(scheduler, str) or not (scheduler in SCHEDULERS or "://" in scheduler):
+        raise src.error("run", "scheduler", f"must be one of {', '.join(SCHEDULERS)} or a "
+                        f"scheduler address such as tcp://host:8786; got {shown(scheduler)}")
+    if out["output"] is not None and not (isinstance(out["output"], str) and out["output"]):
+        raise src.error("run", "output", "must be a file name such as \"study.nc\"; got "
+                        f"{shown(out['output'])}")
+    return out
