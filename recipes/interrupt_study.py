@@ -67,12 +67,22 @@ def same_as(path: Path, reference: xr.Dataset) -> bool:
         return False
 
 
+def _as_in_a_terminal() -> None:
+    """Default Ctrl-C handling in the child, as a command typed in a terminal has.
+
+    A process started in the background by a non-interactive shell inherits SIGINT
+    ignored (POSIX), and Python then installs no KeyboardInterrupt handler: without
+    this, running the recipe with ``&`` would measure nothing but ignored signals.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def interrupt_once(out: Path, delay: float) -> dict:
     """Start from scratch, SIGINT after ``delay`` seconds, observe the aftermath."""
     shutil.rmtree(out.with_name(out.name + ".parts"), ignore_errors=True)
     out.unlink(missing_ok=True)
     proc = subprocess.Popen(command(out), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+                            text=True, preexec_fn=_as_in_a_terminal)
     time.sleep(delay)
     sent = time.perf_counter()
     proc.send_signal(signal.SIGINT)
