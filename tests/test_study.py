@@ -230,3 +230,17 @@ def test_default_study_layout_with_pybsm_numerics_reproduces_pybsm():
     for point, expected in ((a5, (8.180362337723714, 6.990223083421799, 8.252057802116985)),
                             (a6, (9.522427179922438, 8.895972852352036, 9.802914580025174))):
         np.testing.assert_allclose(point.values, expected, rtol=0, atol=1e-8)
+
+
+def test_a_swallowed_ctrl_c_still_stops_the_run(tiny, tmp_path):
+    # the command's Ctrl-C handler sets INTERRUPTED besides raising; a library that swallows
+    # the KeyboardInterrupt cannot keep the run going: it stops after the chunk being saved
+    result = study.run(tiny)
+    store.INTERRUPTED.set()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            study.write(result, tmp_path / "out.nc", scheduler="synchronous")
+    finally:
+        store.INTERRUPTED.clear()
+    assert not (tmp_path / "out.nc").exists()
+    assert len(list((tmp_path / "out.nc.parts").glob("*.npz"))) == 1  # its work kept

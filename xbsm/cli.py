@@ -11,6 +11,7 @@ coverage, the method presets and the versions.
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from importlib import resources
 from pathlib import Path
@@ -19,7 +20,7 @@ import xarray as xr
 
 from . import __version__, plot, study
 from .methods import PRESETS
-from .study.store import check_output
+from .study.store import INTERRUPTED, check_output, stop_if_interrupted
 
 #: The study ``xbsm run`` runs without a study file: the paper's Example 1 (Sec. 3).
 DEFAULT_STUDY = "example1.toml"
@@ -41,6 +42,7 @@ def run(study_file: Path | None, out: Path | None, *, overwrite=False, scheduler
     out = out or Path(spec.output or (Path(study_file or DEFAULT_STUDY).stem + ".nc"))
     check_output(out, overwrite)  # before any work
     result = study.run(spec)
+    stop_if_interrupted()
     study.write(result, out, overwrite=overwrite, scheduler=scheduler or spec.scheduler,
                 workers=workers or spec.workers, progress=progress)
     print(f"wrote {out}")
@@ -97,10 +99,18 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _on_ctrl_c(signum, frame):
+    """Ctrl-C: remember it (for the checks between stages) and raise KeyboardInterrupt."""
+    INTERRUPTED.set()
+    raise KeyboardInterrupt
+
+
 def main(argv=None) -> int:
     """Entry point of the ``xbsm`` command."""
     parser = _parser()
     args = parser.parse_args(argv)
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not if ignored
+        signal.signal(signal.SIGINT, _on_ctrl_c)
     try:
         if args.command == "run":
             if args.workers is not None and args.workers < 1:

@@ -21,7 +21,6 @@ import numpy as np
 import xarray as xr
 from scipy import fft
 from scipy.ndimage import correlate
-from scipy.signal import fftconvolve
 
 from ._arrays import align_leading
 from .options import IMAGE_KNOBS
@@ -75,11 +74,15 @@ def _pad_fft(img, psf):
     psf = _odd(psf)
     half_y, half_x = psf.shape[0] // 2, psf.shape[1] // 2
     padded = np.pad(img, ((half_y, half_y), (half_x, half_x)), mode="reflect")
+    from scipy.signal import fftconvolve  # here: scipy.signal takes a second to import
+
     return fftconvolve(padded, psf[::-1, ::-1], mode="valid")
 
 
 def _fft_zero(img, psf):
     """The fftconvolve of pyBSM (mode "same") on one image: zero outside the image."""
+    from scipy.signal import fftconvolve
+
     return fftconvolve(img, _odd(psf)[::-1, ::-1], mode="same")
 
 

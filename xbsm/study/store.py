@@ -21,6 +21,7 @@ import json
 import os
 import shutil
 import sys
+import threading
 from pathlib import Path
 
 import dask
@@ -77,12 +78,29 @@ def _fingerprint(result: xr.Dataset) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+INTERRUPTED = threading.Event()
+"""Set by the ``xbsm`` command's Ctrl-C handler (see :func:`stop_if_interrupted`)."""
+
+
+def stop_if_interrupted() -> None:
+    """Raise KeyboardInterrupt if Ctrl-C was pressed, even if the first one was lost.
+
+    Python delivers Ctrl-C as an exception in the main thread, which a library
+    may swallow (a bare ``except:``), and never in the threads computing chunks.
+    The command's handler also sets :data:`INTERRUPTED`; checking it between
+    stages and after every saved chunk makes Ctrl-C stop the run regardless.
+    """
+    if INTERRUPTED.is_set():
+        raise KeyboardInterrupt
+
+
 def _save_block(block: xr.Dataset, file: Path) -> None:
-    """Save one computed chunk (all variables) atomically."""
+    """Save one computed chunk (all variables) atomically, then stop if interrupted."""
     partial = file.with_name(file.name + ".tmp")
     with open(partial, "wb") as handle:
         np.savez(handle, **{name: var.values for name, var in block.data_vars.items()})
     os.replace(partial, file)
+    stop_if_interrupted()
 
 
 def _block_file(parts: Path, index) -> Path:
@@ -235,5 +253,6 @@ def write(result: xr.Dataset, path, *, overwrite: bool = False, scheduler: str =
     except OSError as err:
         raise StudyError(f"cannot write to {path.parent}: {err.strerror or err}") from None
     _compute_missing(result, parts, scheduler, workers, progress)
+    stop_if_interrupted()
     _finalize(result, parts, path)
     return path
