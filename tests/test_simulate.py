@@ -648,3 +648,19 @@ def test_every_xbsm_name_on_the_simulate_page_exists():
     text = (DOCS / "simulate.md").read_text()
     for dotted in set(re.findall(r"`(xbsm(?:\.[A-Za-z_][A-Za-z0-9_]*)+)", text)):
         resolve(dotted)
+
+
+def test_image_small_counts_only_the_chosen_components():
+    # a 1-pixel jitter blur on a 24 x 24 image is no problem even when the full system's
+    # blur (diffraction, detector, turbulence) would be wider than the image
+    slant = float(xbsm.geometry.slant_range(4000.0, 3000.0))
+    sensor = xbsm.sensor(**CAMERA, jitter_x=GSD / slant, jitter_y=GSD / slant)
+    image = np.full((24, 24), 0.5)
+    alone = simulate(image, sensor, reflectance="identity", noise=False,
+                     components=("jitter",), resampling="none")
+    assert not bool(xbsm.flags.has_flag(alone["flags"], "image_small").any())
+    system = simulate(image, sensor, reflectance="identity", noise=False, resampling="none")
+    full_blur_px = float((4 * sensor.wavelength_max / sensor.aperture_diameter
+                          + sensor.detector_width_x / sensor.focal_length) * slant / GSD)
+    assert 2 * full_blur_px + 1 > 24  # 4 lambda / D and the detector alone: about 21 px
+    assert bool(xbsm.flags.has_flag(system["flags"], "image_small").all())

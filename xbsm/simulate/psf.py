@@ -90,26 +90,35 @@ def kernel_half_width(optics: Optics, angle, shape):
     Returns
     -------
     int, xr.DataArray
-        The largest half-width over the scenarios (at most the image size): the sum of
-        4 lambda_max / D, the detector width, 4 rms jitter, the drift, 4 lambda_max / r0,
-        3 defocus radii and the filter kernel; and per scenario whether twice it
-        exceeds the image.
+        The largest half-width over the scenarios (at most the image size), which pads
+        the FFT grid: the sum of 4 lambda_max / D, the detector width, 4 rms jitter,
+        the drift, 4 lambda_max / r0, 3 defocus radii and the filter kernel; and per
+        scenario whether twice the same sum over the chosen components only exceeds
+        the image (flag ``image_small``).
     """
     s = optics.sensor
     _, r0 = _slices(optics, xr.DataArray([0.0], dims="frequency"))
     exposure = optics.integration_time * s["tdi_stages"]
-    core = (4 * s["wavelength_max"] / s["aperture_diameter"]
-            + np.maximum(s["detector_width_x"], s["detector_width_y"]) / s["focal_length"]
-            + 4 * np.maximum(s["jitter_x"], s["jitter_y"])
-            + np.maximum(abs(s["drift_rate_x"]), abs(s["drift_rate_y"])) * exposure
-            + 4 * s["wavelength_max"] / r0)
+    widths = {  # the core of each component's blur
+        "aperture": lambda: 4 * s["wavelength_max"] / s["aperture_diameter"],
+        "detector": lambda: (np.maximum(s["detector_width_x"], s["detector_width_y"])
+                             / s["focal_length"]),
+        "jitter": lambda: 4 * np.maximum(s["jitter_x"], s["jitter_y"]),
+        "drift": lambda: np.maximum(abs(s["drift_rate_x"]), abs(s["drift_rate_y"])) * exposure,
+        "turbulence": lambda: 4 * s["wavelength_max"] / r0,
+    }
+    extra = xr.DataArray(0.0)
     if optics.defocus_radius is not None:
-        core = core + 3 * max(float(np.max(r)) for r in optics.defocus_radius)
+        extra = extra + 3 * max(float(np.max(r)) for r in optics.defocus_radius)
     if "filter" in optics.components:
-        core = core + max(s["filter_kernel"].shape) * np.maximum(*optics.pixel_angle)
-    core_px = np.ceil(core / angle)
-    half = int(min(max(1.0, float(np.max(core_px))), max(shape)))
-    return half, (2 * core_px + 1 > min(shape))
+        extra = extra + max(s["filter_kernel"].shape) * np.maximum(*optics.pixel_angle)
+    # the padding keeps every component's width (a wide margin costs only FFT size); the
+    # image_small test counts only the chosen components' blur
+    padding_px = np.ceil((sum(width() for width in widths.values()) + extra) / angle)
+    chosen_px = np.ceil((sum((width() for name, width in widths.items()
+                              if name in optics.components), xr.DataArray(0.0)) + extra) / angle)
+    half = int(min(max(1.0, float(np.max(padding_px))), max(shape)))
+    return half, (2 * chosen_px + 1 > min(shape))
 
 
 def _along(values: xr.DataArray, orientation: str) -> xr.DataArray:
