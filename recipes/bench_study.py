@@ -82,7 +82,7 @@ def chunk_overhead(text: str, repeats: int) -> dict:
     small = scaled(text, 0.1)
     rows = {}
     for chunk in (50_000, 1_000):
-        study = small.replace("[sweep]", f"[run]\nchunk_scenarios = {chunk}\n[sweep]")
+        study = small.replace("chunk_scenarios = 50000", f"chunk_scenarios = {chunk}")
         rows[chunk] = median_of([run_once(study, "threads", 2) for _ in range(repeats)])
     few, many = rows[50_000], rows[1_000]
     per_chunk = (many["write_s"] - few["write_s"]) / (many["chunks"] - few["chunks"])
