@@ -94,11 +94,11 @@ def stop_if_interrupted() -> None:
         raise KeyboardInterrupt
 
 
-def _save_block(block: xr.Dataset, file: Path) -> None:
-    """Save one computed chunk (all variables) atomically, then stop if interrupted."""
+def _save_block(arrays: dict, file: Path) -> None:
+    """Save one computed chunk (every variable's block) atomically, then stop if interrupted."""
     partial = file.with_name(file.name + ".tmp")
     with open(partial, "wb") as handle:
-        np.savez(handle, **{name: var.values for name, var in block.data_vars.items()})
+        np.savez(handle, **arrays)
     os.replace(partial, file)
     stop_if_interrupted()
 
@@ -148,8 +148,17 @@ def _compute_missing(result: xr.Dataset, parts: Path, scheduler: str, workers: i
                      progress: bool) -> None:
     """Compute and save every chunk that has no file yet."""
     chunks = dict(result.chunks)
-    tasks = [dask.delayed(_save_block)(result.isel(slices), _block_file(parts, index))
-             for index, slices in _blocks(chunks) if not _block_file(parts, index).exists()]
+    grid = tuple(chunks)
+    # every variable's blocks as delayed objects, in one pass over the graph (selecting
+    # the result chunk by chunk instead rebuilds and culls the whole graph for each)
+    blocks = {name: var.data.to_delayed() for name, var in result.data_vars.items()}
+    tasks = []
+    for index, _ in _blocks(chunks):
+        if _block_file(parts, index).exists():
+            continue
+        arrays = {name: blocks[name][tuple(index[grid.index(dim)] for dim in var.dims)]
+                  for name, var in result.data_vars.items()}
+        tasks.append(dask.delayed(_save_block)(arrays, _block_file(parts, index)))
     total = int(np.prod([len(sizes) for sizes in chunks.values()]))
     if progress:
         print(f"{total - len(tasks)} of {total} chunks already done; computing {len(tasks)} "
