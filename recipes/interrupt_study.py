@@ -17,7 +17,7 @@ Prints one line per try and a summary; writes ``docs/benchmarks/interrupt_study.
 
 Run from the repository root with the project environment::
 
-    .venv/bin/python recipes/interrupt_study.py [--tries 20]
+    .venv/bin/python recipes/interrupt_study.py [--tries 20] [--study STUDY.toml]
 """
 
 from __future__ import annotations
@@ -42,15 +42,15 @@ STUDY = ROOT / "recipes" / "studies" / "interrupt.toml"
 HANG_SECONDS = 30.0
 
 
-def command(out: Path) -> list[str]:
+def command(out: Path, study: Path = STUDY) -> list[str]:
     """The command a user types, run with this interpreter."""
-    return [sys.executable, "-m", "xbsm.cli", "run", str(STUDY), "-o", str(out), "--no-figures"]
+    return [sys.executable, "-m", "xbsm.cli", "run", str(study), "-o", str(out), "--no-figures"]
 
 
-def reference_run(out: Path) -> tuple[float, xr.Dataset]:
+def reference_run(out: Path, study: Path) -> tuple[float, xr.Dataset]:
     """One uninterrupted run: its duration and its output."""
     start = time.perf_counter()
-    subprocess.run(command(out), check=True, capture_output=True)
+    subprocess.run(command(out, study), check=True, capture_output=True)
     duration = time.perf_counter() - start
     with xr.open_dataset(out) as ds:
         return duration, ds.load()
@@ -77,11 +77,11 @@ def _as_in_a_terminal() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
-def interrupt_once(out: Path, delay: float) -> dict:
+def interrupt_once(out: Path, delay: float, study: Path) -> dict:
     """Start from scratch, SIGINT after ``delay`` seconds, observe the aftermath."""
     shutil.rmtree(out.with_name(out.name + ".parts"), ignore_errors=True)
     out.unlink(missing_ok=True)
-    proc = subprocess.Popen(command(out), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    proc = subprocess.Popen(command(out, study), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, preexec_fn=_as_in_a_terminal)
     time.sleep(delay)
     sent = time.perf_counter()
@@ -101,9 +101,9 @@ def interrupt_once(out: Path, delay: float) -> dict:
             "message": err.strip().splitlines()[-1] if err.strip() else ""}
 
 
-def resume(out: Path) -> dict:
+def resume(out: Path, study: Path) -> dict:
     """Run the same command again; how many chunks it found done."""
-    proc = subprocess.run(command(out), capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(command(out, study), capture_output=True, text=True, timeout=600)
     found = re.search(r"(\d+) of (\d+) chunks already done", proc.stderr)
     return {"resume_exit_code": proc.returncode,
             "resume_found_done": int(found.group(1)) if found else None,
@@ -113,20 +113,21 @@ def resume(out: Path) -> dict:
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tries", type=int, default=20)
+    parser.add_argument("--study", type=Path, default=STUDY, help="study file to interrupt")
     parser.add_argument("--out", type=Path, default=ROOT / "docs/benchmarks/interrupt_study.json")
     args = parser.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "study.nc"
-        duration, reference = reference_run(out)
+        duration, reference = reference_run(out, args.study)
         print(f"uninterrupted run: {duration:.1f} s", flush=True)
         for i in range(args.tries):
             delay = (i + 0.5) / args.tries * duration * 1.05
-            row = interrupt_once(out, delay)
+            row = interrupt_once(out, delay, args.study)
             finished_before = row["output_exists"]
             row["output_complete"] = same_as(out, reference) if finished_before else None
             if not finished_before:
-                row.update(resume(out))
+                row.update(resume(out, args.study))
                 row["resumed_output_correct"] = same_as(out, reference)
             rows.append(row)
             print(json.dumps(row), flush=True)
@@ -143,7 +144,9 @@ def main():
                "chunks_reused": sum(r.get("resume_found_done") or 0 for r in rows),
                "failures": len(bad), "uninterrupted_s": duration}
     print(json.dumps(summary))
-    args.out.write_text(json.dumps({"machine": machine(), "commit": commit(),
+    study = args.study.resolve()
+    study = study.relative_to(ROOT) if study.is_relative_to(ROOT) else study
+    args.out.write_text(json.dumps({"machine": machine(), "commit": commit(), "study": str(study),
                                     "summary": summary, "tries": rows}, indent=1))
     print(f"wrote {args.out}")
 
