@@ -63,12 +63,9 @@ def _versions() -> str:
     return ", ".join(f"{name} {md.version(name)}" for name in names)
 
 
-def _blocks(chunks: dict[str, tuple]):
-    """(block index, slices) for every chunk of the grid."""
-    starts = {dim: np.concatenate([[0], np.cumsum(sizes)]) for dim, sizes in chunks.items()}
-    for index in itertools.product(*(range(len(sizes)) for sizes in chunks.values())):
-        yield index, {dim: slice(int(starts[dim][i]), int(starts[dim][i + 1]))
-                      for dim, i in zip(chunks, index, strict=True)}
+def _block_indices(chunks: dict[str, tuple]):
+    """The index of every chunk of the grid (one entry per dimension)."""
+    return itertools.product(*(range(len(sizes)) for sizes in chunks.values()))
 
 
 def _fingerprint(result: xr.Dataset) -> str:
@@ -153,7 +150,7 @@ def _compute_missing(result: xr.Dataset, parts: Path, scheduler: str, workers: i
     # the result chunk by chunk instead rebuilds and culls the whole graph for each)
     blocks = {name: var.data.to_delayed() for name, var in result.data_vars.items()}
     tasks = []
-    for index, _ in _blocks(chunks):
+    for index in _block_indices(chunks):
         if _block_file(parts, index).exists():
             continue
         arrays = {name: blocks[name][tuple(index[grid.index(dim)] for dim in var.dims)]
