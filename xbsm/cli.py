@@ -20,7 +20,7 @@ import xarray as xr
 
 from . import __version__, plot, study
 from .methods import PRESETS
-from .study.store import INTERRUPTED, check_output, stop_if_interrupted
+from .study.store import INTERRUPTED, check_output, dependency_versions, stop_if_interrupted
 
 #: The study ``xbsm run`` runs without a study file: the paper's Example 1 (Sec. 3).
 DEFAULT_STUDY = "example1.toml"
@@ -66,10 +66,8 @@ def draw(result_file: Path, directory: Path) -> list[Path]:
 def info() -> None:
     """Print the atmosphere coverage, the method presets and the versions."""
     from .atmosphere import database_path, open_atmosphere
-    from .study.store import _versions
-
     atm = open_atmosphere()
-    print(f"xbsm {__version__} ({_versions()})")
+    print(f"xbsm {__version__} ({dependency_versions()})")
     print(f"atmosphere database: {database_path()}")
     for dim, units, scale in (("altitude", "km", 1e-3), ("ground_range", "km", 1e-3),
                               ("visibility", "km", 1.0), ("wavelength", "um", 1e6)):

@@ -160,8 +160,7 @@ def _context(ds: xr.Dataset) -> _Context:
         fixed.append(f"method {ds.attrs['xbsm_method']}")
     if fixed:
         lines.append(", ".join(fixed))
-    frequency = ds["frequency"].values if "frequency" in ds.coords else (
-        study.mtf_frequency if study is not None else None)
+    frequency = ds["frequency"].values if "frequency" in ds.coords else None
     return _Context("\n".join(lines), frequency)
 
 

@@ -134,8 +134,8 @@ def _mtf_figure(ds: xr.Dataset, ctx: _Context):
     if "mtf_system" not in ds:
         return
     if ctx.frequency is None or len(ctx.frequency) != ds.sizes["frequency"]:
-        raise ValueError("the mtf_* variables have no frequency coordinate [cycles/rad] and "
-                         "the result has no study text to recover it from")
+        raise ValueError("the mtf_* variables need a frequency coordinate [cycles/rad] "
+                         "(xbsm.study results carry one)")
     from matplotlib.figure import Figure
 
     selector, described = _point(ds, {"band": "red", **MTF_POINT}, keep=("ground_range",))

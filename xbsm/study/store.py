@@ -56,7 +56,8 @@ def atmosphere_checksum(path=None) -> str:
     return digest.hexdigest()
 
 
-def _versions() -> str:
+def dependency_versions() -> str:
+    """The versions of xbsm's runtime dependencies, for provenance and ``xbsm info``."""
     import importlib.metadata as md
 
     names = ("numpy", "scipy", "xarray", "dask", "netCDF4", "matplotlib")
@@ -196,7 +197,7 @@ def _finalize(result: xr.Dataset, parts: Path, path: Path) -> None:
     """Stream the chunk files into ``path`` through a temporary file, then rename."""
     partial = path.with_name(path.name + ".partial")
     final = _assembled(result, parts).assign_attrs(
-        xbsm_atmosphere_sha256=atmosphere_checksum(), xbsm_dependencies=_versions(),
+        xbsm_atmosphere_sha256=atmosphere_checksum(), xbsm_dependencies=dependency_versions(),
         date_created=np.datetime_as_string(np.datetime64("now", "s")) + "Z")
     try:
         with dask.config.set(scheduler="synchronous"):  # one thread: nothing waits on a lock
