@@ -339,24 +339,26 @@ def _suggesting(func):
     return wrapper
 
 
-def _check_shared_dims(values, kind: str) -> None:
+def _check_shared_dims(values, kind: str, indexes=None) -> None:
     """Parameters swept on one dimension must agree on its length and coordinates.
 
-    ``values`` maps parameter names to DataArrays; ``kind`` names them in the error
-    ("sensor", or "sensor and scenario" for the two datasets of a model call).
+    ``values`` maps parameter names to DataArrays or Variables; ``kind`` names them in
+    the error ("sensor", or "sensor and scenario" for the two datasets of a model call).
+    ``indexes`` maps each name to its indexes by dimension (default: the DataArrays' own).
     """
     seen = {}
     for name, value in values.items():
-        for dim in value.dims:
-            index = value.indexes.get(dim)
+        own = value.indexes if indexes is None else indexes[name]
+        for dim, size in zip(value.dims, value.shape):
+            index = own.get(dim)
             if dim not in seen:
-                seen[dim] = (name, value.sizes[dim], index)
+                seen[dim] = (name, size, index)
                 continue
-            first, size, first_index = seen[dim]
-            if size != value.sizes[dim]:
+            first, first_size, first_index = seen[dim]
+            if first_size != size:
                 raise ValueError(
                     f"{kind} parameters {first} and {name} both sweep dimension {dim!r} but "
-                    f"with {size} and {value.sizes[dim]} values; one dimension is one sweep: "
+                    f"with {first_size} and {size} values; one dimension is one sweep: "
                     "give them one length, or different dimension names for a product")
             if index is not None and first_index is not None and not index.equals(first_index):
                 raise ValueError(
@@ -678,27 +680,35 @@ def check_inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> None:
     """
     check_kind(sensor, "sensor", "sensor")
     check_kind(scenario, "scenario", "scenario")
+    # on the datasets' Variables: a DataArray per parameter would cost more than the checks
     for kind, ds, specs in (("sensor", sensor, SENSOR_SPECS),
                             ("scenario", scenario, SCENARIO_SPECS)):
+        variables = ds.variables
         for name, spec in specs.items():
-            if name not in ds:
+            if name not in variables:
                 raise ValueError(f"the {kind} dataset has no parameter {name!r}; "
                                  f"make it with xbsm.{kind}(...)")
-            value = ds[name]
+            value = variables[name]
             # a parameter swept alongside another on that one's own dimension is paired
             # with it (a derived default such as pixel_pitch_y, or a user's paired sweep)
-            paired = tuple(dim for dim in value.dims if dim in ds and ds[dim].dims == (dim,))
+            paired = tuple(dim for dim in value.dims
+                           if dim in variables and variables[dim].dims == (dim,))
             _check_dims(name, value, allowed=(f"{name}_wavelength", *paired))
             if value.chunks is None:
                 mask = spec.violated(value.values)
                 if np.any(mask):
                     _raise(name, spec, value.values[mask].ravel()[0])
-    low, high = (sensor[name] for name in ("wavelength_min", "wavelength_max"))
-    if low.ndim or high.ndim or not float(low) < float(high):
+    low, high = (sensor.variables[name] for name in ("wavelength_min", "wavelength_max"))
+    if low.ndim or high.ndim or not float(low.values) < float(high.values):
         raise ValueError("wavelength_min and wavelength_max must be scalars with "
                          f"wavelength_min < wavelength_max; got {low.values} and {high.values}")
     if "filter_kernel" not in sensor:
         raise ValueError("the sensor dataset has no parameter 'filter_kernel'; make it with "
                          "xbsm.sensor(...)")
     _kernel(sensor["filter_kernel"])  # an edited kernel: dims, finite, sums to 1
-    _check_shared_dims({**sensor.data_vars, **scenario.data_vars}, "sensor and scenario")
+    values, indexes = {}, {}
+    for ds in (sensor, scenario):
+        own = ds.indexes
+        for name in ds.data_vars:
+            values[name], indexes[name] = ds.variables[name], own
+    _check_shared_dims(values, "sensor and scenario", indexes)
