@@ -139,9 +139,9 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
     view = geometry.viewing_geometry(
         scenario["ground_range"], scenario["altitude"], sensor["pixel_pitch_x"],
         sensor["pixel_pitch_y"], sensor["focal_length"], elevation=m.elevation, form=m.geometry)
-    edges = _edge_terms(sensor, scenario, r, cutoff, view, m)
     ifov = xr.concat([view["ifov_x"], view["ifov_y"]], dim="orientation").assign_coords(
         orientation=["x", "y"])
+    edges = _edge_terms(sensor, scenario, r, cutoff, view, ifov, m)
     giqe = metrics.giqe_by_version(
         rer=edges["rer"], eho=edges["eho"], rer_x=edges["rer_unfiltered_x"],
         rer_y=edges["rer_unfiltered_y"], gsd_x=view["gsd_x"], gsd_y=view["gsd_y"],
@@ -155,7 +155,7 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
     return result({
         "niirs": giqe["niirs"],
         **{name: r[name] for name in r.data_vars if name not in ("spectral_weights", "flags")},
-        **{name: edges[name] for name in edges.data_vars
+        **{name: value for name, value in edges.items()
            if name not in ("undersampled", "rer_unfiltered_x", "rer_unfiltered_y")},
         **{name: giqe[name] for name in giqe.data_vars if name not in ("niirs", "flags")},
         **{name: view[name] for name in ("slant_range", "elevation_angle")},
@@ -164,7 +164,7 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
 
 
 def _edge_terms(s: xr.Dataset, sc: xr.Dataset, r: xr.Dataset, cutoff: xr.DataArray,
-                view: xr.Dataset, m: Method) -> xr.Dataset:
+                view: xr.Dataset, ifov: xr.DataArray, m: Method) -> dict:
     """RER and EHO of the system OTF on the x and y slices, at the method's quadrature nodes."""
     weights = r["spectral_weights"]
     ifov_x, ifov_y = view["ifov_x"], view["ifov_y"]
@@ -172,7 +172,6 @@ def _edge_terms(s: xr.Dataset, sc: xr.Dataset, r: xr.Dataset, cutoff: xr.DataArr
     otf = system_components(s, sc, nodes, spectral_weights=otf_weights(weights),
                             integration_time=r["effective_integration_time"],
                             slant_range=view["slant_range"], method=m)
-    ifov = xr.concat([ifov_x, ifov_y], dim="orientation").assign_coords(orientation=["x", "y"])
 
     def edge(system):
         return metrics.edge_terms(abs(system) if m.edge_otf == "abs" else system, ifov,
@@ -181,28 +180,28 @@ def _edge_terms(s: xr.Dataset, sc: xr.Dataset, r: xr.Dataset, cutoff: xr.DataArr
     filtered = edge(otf["system"])
     unfiltered = filtered if s["filter_kernel"].shape == (1, 1) else edge(
         otf["system_unfiltered"])
-    terms = {f"{name}_{o}": filtered[name].sel(orientation=o, drop=True).assign_attrs(
+    by_orientation = {o: filtered.sel(orientation=o, drop=True) for o in ("x", "y")}
+    terms = {f"{name}_{o}": by_orientation[o][name].assign_attrs(
                  units="1", long_name=f"{long} along {o}")
              for name, long in (("rer", "relative edge response"),
                                 ("eho", "edge height overshoot")) for o in ("x", "y")}
     coarse = False
     if m.edge_rule == "uniform_trapezoid":
         coarse = undersampled(nodes, cutoff, ifov_x, ifov_y, m.undersampling_threshold)
-    blurred = np.sqrt(terms["rer_x"] * terms["rer_y"]) < UNRESOLVED_RER
+    rer = np.sqrt(terms["rer_x"] * terms["rer_y"])
     flags = fl.set_flag(xr.DataArray(np.int32(0)), "undersampled_grid", coarse)
-    return xr.Dataset({
+    unfiltered_rer = unfiltered["rer"]
+    return {
         **terms,
-        "rer": np.sqrt(terms["rer_x"] * terms["rer_y"]).assign_attrs(
-            units="1", long_name="relative edge response (geometric mean)"),
+        "rer": rer.assign_attrs(units="1", long_name="relative edge response (geometric mean)"),
         "eho": np.sqrt(terms["eho_x"] * terms["eho_y"]).assign_attrs(
             units="1", long_name="edge height overshoot (geometric mean)"),
-        "rer_unfiltered_x": unfiltered["rer"].sel(orientation="x", drop=True),
-        "rer_unfiltered_y": unfiltered["rer"].sel(orientation="y", drop=True),
+        "rer_unfiltered_x": unfiltered_rer.sel(orientation="x", drop=True),
+        "rer_unfiltered_y": unfiltered_rer.sel(orientation="y", drop=True),
         "coherence_diameter": otf["coherence_diameter"],
         "cutoff_frequency": cutoff,
-        "undersampled": fl.set_flag(flags, "blur_unresolved", blurred),
-    })
-
+        "undersampled": fl.set_flag(flags, "blur_unresolved", rer < UNRESOLVED_RER),
+    }
 
 
 def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method="accurate",
