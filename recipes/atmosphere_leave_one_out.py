@@ -19,9 +19,9 @@ docs/atmosphere.md; see ``recipes/README.md``)::
 
 from __future__ import annotations
 
-import numpy as np
-
 import dataclasses
+
+import numpy as np
 
 from xbsm.atmosphere import (
     COMPONENTS,

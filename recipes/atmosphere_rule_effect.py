@@ -6,7 +6,8 @@ visibilities, ``method="accurate"`` with ``atmosphere_interpolation`` "log-linea
 (fixed ground range) against "same-elevation". Cells that are NaN under either rule
 (beyond the horizon) are left out, and so are cells where either NIIRS is off the
 0-10 rating scale (SNR near zero at long range in 5 km visibility, where NIIRS runs
-to minus infinity and any difference is meaningless). Writes ``docs/benchmarks/atmosphere_rule_effect.json``.
+to minus infinity and any difference is meaningless).
+Writes ``docs/benchmarks/atmosphere_rule_effect.json``.
 
 Run from the repository root with the project environment::
 

@@ -48,7 +48,6 @@ from types import MappingProxyType
 import netCDF4
 import numpy as np
 import xarray as xr
-
 from scipy.special import erfcx
 
 from ._metadata import named
@@ -334,12 +333,13 @@ def _locate(altitude, ground_range, visibility, db, log_altitude=False):
 
 
 def _ground_range_at_elevation(sin_elevation, cos_elevation, altitude):
-    """Ground range at which a sensor at ``altitude`` sees a ground target at a given
-    elevation angle (measured at the target) over the spherical Earth (numpy kernel). [m]
+    """Ground range at which a sensor at ``altitude`` sees the target at a given elevation.
 
-    The slant range solves ``(R + h)^2 = R^2 + s^2 + 2 R s sin(e)`` in the form without
-    cancellation, ``s = h (2R + h) / (sqrt(R^2 sin^2 e + h (2R + h)) + R sin e)``; the
-    central angle is ``atan2(s cos e, R + s sin e)``.
+    The elevation angle is measured at the target (on the ground), the Earth is a
+    sphere; numpy kernel, result in [m]. The slant range solves
+    ``(R + h)^2 = R^2 + s^2 + 2 R s sin(e)`` in the form without cancellation,
+    ``s = h (2R + h) / (sqrt(R^2 sin^2 e + h (2R + h)) + R sin e)``; the central angle
+    is ``atan2(s cos e, R + s sin e)``.
     """
     above = altitude * (2.0 * EARTH_RADIUS + altitude)
     rise = EARTH_RADIUS * sin_elevation
@@ -362,8 +362,12 @@ def _optical_path_above(altitude, sin_elevation):
 
 
 def _same_elevation(altitude, ground_range, vis, alt, db):
-    """Ground-range brackets in both altitude tables along the scenario's elevation angle,
-    the altitude weight, and where every bracketing spectrum exists (numpy kernel)."""
+    """Brackets of the line of sight in both altitude tables, and its altitude weight.
+
+    Returns the ground-range brackets in both tables at the scenario's target
+    elevation angle, the altitude weight, and where every bracketing spectrum exists
+    (numpy kernel).
+    """
     a0, a1, _ = alt
     elevation = target_elevation_angle(slant_range(ground_range, altitude), altitude)
     sin_e, cos_e = np.sin(elevation), np.cos(elevation)
@@ -385,8 +389,11 @@ def _same_elevation(altitude, ground_range, vis, alt, db):
 
 
 def _scenarios(altitude, ground_range, visibility, interpolation, db):
-    """Validated flat inputs, their brackets, where all four bracketing tables exist, and
-    the same-elevation brackets, weight and usability (or None)."""
+    """Validated flat inputs with their brackets and same-elevation brackets.
+
+    Also where all four fixed-range tables exist; the same-elevation part is None for
+    other rules.
+    """
     altitude, ground_range, visibility = (
         np.asarray(a, dtype=np.float64) for a in
         np.broadcast_arrays(altitude, ground_range, visibility))
@@ -419,8 +426,11 @@ def _flags_kernel(altitude, ground_range, visibility, *, path, interpolation):
 
 
 def _two_steps(pair_low, pair_high, first, second, rules):
-    """Interpolate each pair with its weight of ``first``, then the two results with
-    ``second`` (``rules``: the rule of each step)."""
+    """Interpolate two pairs, then the two results.
+
+    Each pair with its weight in ``first``, the results with ``second``; ``rules``
+    names the rule of each step.
+    """
     low = _interp(*pair_low, first[0], rules[0])
     high = _interp(*pair_high, first[1], rules[0])
     return _interp(low, high, second, rules[1])
@@ -433,8 +443,11 @@ def _spectra_kernel(altitude, ground_range, visibility, *, path, interpolation, 
 
 
 def _interpolate_database(db, altitude, ground_range, visibility, interpolation, window):
-    """Spectra of ``db`` (a :class:`_Database`, possibly with tables removed, as the
-    leave-one-out recipe does) at each scenario, shape (..., component, wavelength)."""
+    """Spectra of ``db`` at each scenario, shape (..., component, wavelength).
+
+    ``db`` is a :class:`_Database`, possibly with tables removed (the leave-one-out
+    recipe does that).
+    """
     shape, _, vis, (a0, a1, wa), (g0, g1, wg), _, along = _scenarios(
         altitude, ground_range, visibility, interpolation, db)
     alt_rule, _, gr_rule = _RULES[interpolation]
