@@ -213,3 +213,15 @@ def test_every_knob_rejects_a_bad_value_when_the_method_is_made(knob):
 def test_misspelt_knob_gets_the_closest_names():
     with pytest.raises(ValueError, match="did you mean 'nodes_per_panel'"):
         xbsm.method("accurate", nodes_per_pannel=12)
+
+
+def test_atmosphere_interpolation_defaults_same_elevation_and_pybsm_keeps_linear():
+    # docs/atmosphere.md: "same-elevation" wins the altitude leave-one-out; "linear" is
+    # pyBSM 0.16.1's load_database_atmosphere; the old default stays available by name
+    assert PRESETS["accurate"].atmosphere_interpolation == "same-elevation"
+    assert PRESETS["fast"].atmosphere_interpolation == "same-elevation"
+    assert PRESETS["pybsm"].atmosphere_interpolation == "linear"
+    assert xbsm.method("accurate", atmosphere_interpolation="log-linear").describe() == (
+        "accurate (atmosphere_interpolation=log-linear)")
+    with pytest.raises(ValueError, match="atmosphere_interpolation must be one of"):
+        xbsm.method("accurate", atmosphere_interpolation="same_elevation")

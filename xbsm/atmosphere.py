@@ -13,11 +13,23 @@ Interpolation between database nodes (``interpolation=``):
 ``"linear"``
     pyBSM 0.16.1's ``load_database_atmosphere`` rule, bit for bit: linear in
     altitude at the two bracketing ground ranges, then linear in ground range.
-``"log-linear"`` (default)
+``"log-linear"`` (default of :func:`atmosphere_at`)
     The same two steps on the logarithm of each value (transmittance falls
     exponentially with path length), with the altitude weight linear in
-    log(altitude); linear in the value where a bracketing value is zero. The
-    leave-one-out errors behind this choice are in ``docs/atmosphere.md``.
+    log(altitude); linear in the value where a bracketing value is zero.
+``"same-elevation"`` (default of the ``accurate`` and ``fast`` presets)
+    Transmittance, surface emission and ground-reflected radiance (the components
+    attenuated along the path) are interpolated between the two altitude tables
+    along paths of the same elevation angle at the target: each table is read,
+    log-linearly in ground range, at the ground range where its line of sight
+    leaves the target at the scenario's angle; the logarithms are then combined
+    with the weight of the extra optical path of an exponential atmosphere
+    (scale height :data:`SCALE_HEIGHT`) over a spherical Earth. The path
+    radiances use ``"log-linear"``. Where a same-elevation point leaves a table's
+    coverage (the horizon, 300 km) and above 24.5 km the rule falls back to
+    ``"log-linear"`` and sets the ``atmosphere_fallback`` flag (not at 24.5-550 km).
+
+The leave-one-out errors behind these choices are in ``docs/atmosphere.md``.
 
 At a database node every option returns the stored value exactly. Where a
 bracketing table is missing (beyond the horizon of the lower altitude, or above
@@ -36,14 +48,18 @@ from types import MappingProxyType
 import netCDF4
 import numpy as np
 import xarray as xr
+from scipy.special import erfcx
 
 from ._metadata import named
+from .constants import EARTH_RADIUS
 from .flags import flag, flag_attrs
+from .geometry import slant_range, target_elevation_angle
 from .units import in_units
 
 __all__ = [
     "COMPONENTS",
     "INTERPOLATIONS",
+    "SCALE_HEIGHT",
     "VARIABLES",
     "atmosphere_at",
     "band_atmosphere",
@@ -80,7 +96,14 @@ _RULES = MappingProxyType({
     "exact": ("linear", "altitude", "linear"),
     "linear": ("linear", "altitude", "linear"),
     "log-linear": ("log", "log_altitude", "log"),
+    "same-elevation": ("log", "log_altitude", "log"),  # the path radiances and the fallback
 })
+#: Components that ``"same-elevation"`` interpolates along the line of sight (indices of
+#: TRANS, SURF_EMIS, GRND_RFLT: attenuated along the path; the path radiances are not).
+_ALONG_PATH = (0, 2, 4)
+#: Scale height of the extinction profile behind the ``"same-elevation"`` altitude weight:
+#: 2 km is the best of 0.5-3 km in the altitude leave-one-out (docs/atmosphere.md). [m]
+SCALE_HEIGHT = 2000.0
 #: Accepted values of ``interpolation``.
 INTERPOLATIONS = tuple(_RULES)
 _GAP = (24500.0, 550000.0)  # altitudes with no table in between [m]
@@ -309,33 +332,125 @@ def _locate(altitude, ground_range, visibility, db, log_altitude=False):
     return vis, alt, gr
 
 
-def _flags_kernel(altitude, ground_range, visibility, *, path, interpolation):
-    """Compute the validity flags of each scenario (numpy kernel)."""
-    db = _load_database(path)
-    altitude, ground_range, visibility = (
-        np.asarray(a, dtype=np.float64) for a in
-        np.broadcast_arrays(altitude, ground_range, visibility))
-    _validate(altitude, ground_range, visibility, interpolation, db)
-    vis, (a0, a1, _), (g0, g1, _) = _locate(altitude, ground_range, visibility, db)
-    p = db.present
-    complete = p[vis, a0, g0] & p[vis, a1, g0] & p[vis, a0, g1] & p[vis, a1, g1]
-    out = np.where(complete, 0, flag("beyond_database"))
-    sparse = (altitude > _GAP[0]) & (altitude < _GAP[1])
-    return (out | np.where(sparse, flag("atmosphere_sparse"), 0)).astype(np.int32)
+def _ground_range_at_elevation(sin_elevation, cos_elevation, altitude):
+    """Ground range at which a sensor at ``altitude`` sees the target at a given elevation.
+
+    The elevation angle is measured at the target (on the ground), the Earth is a
+    sphere; numpy kernel, result in [m]. The slant range solves
+    ``(R + h)^2 = R^2 + s^2 + 2 R s sin(e)`` in the form without cancellation,
+    ``s = h (2R + h) / (sqrt(R^2 sin^2 e + h (2R + h)) + R sin e)``; the central angle
+    is ``atan2(s cos e, R + s sin e)``.
+    """
+    above = altitude * (2.0 * EARTH_RADIUS + altitude)
+    rise = EARTH_RADIUS * sin_elevation
+    slant = above / (np.sqrt(rise * rise + above) + rise)
+    return EARTH_RADIUS * np.arctan2(slant * cos_elevation,
+                                     EARTH_RADIUS + slant * sin_elevation)
 
 
-def _spectra_kernel(altitude, ground_range, visibility, *, path, interpolation, window):
-    """Interpolated spectra, shape (..., component, wavelength) (numpy kernel)."""
-    db = _load_database(path)
+def _optical_path_above(altitude, sin_elevation):
+    """Optical path above ``altitude`` of a line of sight from the ground (numpy kernel).
+
+    For extinction ``exp(-z / H)`` and the thin-shell path element
+    ``dz / sqrt(sin^2 e + 2 z / R)``, the optical depth between two heights is
+    proportional to the difference of this function (``H`` = :data:`SCALE_HEIGHT`):
+    ``erfcx(sqrt(k (sin^2 e + 2 h / R))) exp(-h / H)`` with ``k = R / (2 H)``.
+    """
+    k = EARTH_RADIUS / (2.0 * SCALE_HEIGHT)
+    inside = k * (sin_elevation * sin_elevation + 2.0 * altitude / EARTH_RADIUS)
+    return erfcx(np.sqrt(inside)) * np.exp(-altitude / SCALE_HEIGHT)
+
+
+def _same_elevation(altitude, ground_range, vis, alt, db):
+    """Brackets of the line of sight in both altitude tables, and its altitude weight.
+
+    Returns the ground-range brackets in both tables at the scenario's target
+    elevation angle, the altitude weight, and where every bracketing spectrum exists
+    (numpy kernel).
+    """
+    a0, a1, _ = alt
+    elevation = target_elevation_angle(slant_range(ground_range, altitude), altitude)
+    sin_e, cos_e = np.sin(elevation), np.cos(elevation)
+    usable = (elevation > 0.0) & (db.altitude[a1] <= _GAP[0])
+    brackets = []
+    for a in (a0, a1):
+        node = db.altitude[a]
+        same = (node == altitude) | (ground_range == 0.0)  # exact on a node and at nadir
+        g = np.where(same, ground_range, _ground_range_at_elevation(sin_e, cos_e, node))
+        usable &= g <= db.ground_range[-1]
+        g0, g1, wg = _bracket(np.minimum(g, db.ground_range[-1]), db.ground_range)
+        usable &= db.present[vis, a, g0] & db.present[vis, a, g1]
+        brackets.append((g0, g1, wg))
+    path0, path, path1 = (_optical_path_above(h, sin_e)
+                          for h in (db.altitude[a0], altitude, db.altitude[a1]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        weight = np.where(a0 == a1, 0.0, (path0 - path) / (path0 - path1))
+    return brackets, weight, usable
+
+
+def _scenarios(altitude, ground_range, visibility, interpolation, db):
+    """Validated flat inputs with their brackets and same-elevation brackets.
+
+    Also where all four fixed-range tables exist; the same-elevation part is None for
+    other rules.
+    """
     altitude, ground_range, visibility = (
         np.asarray(a, dtype=np.float64) for a in
         np.broadcast_arrays(altitude, ground_range, visibility))
     _validate(altitude, ground_range, visibility, interpolation, db)
     shape = altitude.shape
-    alt_rule, alt_coord, gr_rule = _RULES[interpolation]
-    vis, alt, gr = _locate(altitude.ravel(), ground_range.ravel(), visibility.ravel(), db,
-                           log_altitude=alt_coord == "log_altitude")
-    (a0, a1, wa), (g0, g1, wg) = alt, gr
+    altitude, ground_range = altitude.ravel(), ground_range.ravel()
+    vis, alt, gr = _locate(altitude, ground_range, visibility.ravel(), db,
+                           log_altitude=_RULES[interpolation][1] == "log_altitude")
+    (a0, a1, _), (g0, g1, _), p = alt, gr, db.present
+    complete = p[vis, a0, g0] & p[vis, a1, g0] & p[vis, a0, g1] & p[vis, a1, g1]
+    along = None
+    if interpolation == "same-elevation":
+        brackets, weight, usable = _same_elevation(altitude, ground_range, vis, alt, db)
+        along = (brackets, weight, usable & complete)  # never finite where others are NaN
+    return shape, altitude, vis, alt, gr, complete, along
+
+
+def _flags_kernel(altitude, ground_range, visibility, *, path, interpolation):
+    """Compute the validity flags of each scenario (numpy kernel)."""
+    db = _load_database(path)
+    shape, altitude, _, _, _, complete, along = _scenarios(
+        altitude, ground_range, visibility, interpolation, db)
+    out = np.where(complete, 0, flag("beyond_database"))
+    sparse = (altitude > _GAP[0]) & (altitude < _GAP[1])
+    out |= np.where(sparse, flag("atmosphere_sparse"), 0)
+    if along is not None:
+        fallback = complete & ~along[2] & (altitude <= _GAP[0])
+        out |= np.where(fallback, flag("atmosphere_fallback"), 0)
+    return out.astype(np.int32).reshape(shape)
+
+
+def _two_steps(pair_low, pair_high, first, second, rules):
+    """Interpolate two pairs, then the two results.
+
+    Each pair with its weight in ``first``, the results with ``second``; ``rules``
+    names the rule of each step.
+    """
+    low = _interp(*pair_low, first[0], rules[0])
+    high = _interp(*pair_high, first[1], rules[0])
+    return _interp(low, high, second, rules[1])
+
+
+def _spectra_kernel(altitude, ground_range, visibility, *, path, interpolation, window):
+    """Interpolated spectra, shape (..., component, wavelength) (numpy kernel)."""
+    return _interpolate_database(_load_database(path), altitude, ground_range, visibility,
+                                interpolation, window)
+
+
+def _interpolate_database(db, altitude, ground_range, visibility, interpolation, window):
+    """Spectra of ``db`` at each scenario, shape (..., component, wavelength).
+
+    ``db`` is a :class:`_Database`, possibly with tables removed (the leave-one-out
+    recipe does that).
+    """
+    shape, _, vis, (a0, a1, wa), (g0, g1, wg), _, along = _scenarios(
+        altitude, ground_range, visibility, interpolation, db)
+    alt_rule, _, gr_rule = _RULES[interpolation]
     cube = db.cube[..., window]
     n_comp, n_wl = cube.shape[-2:]
     out = np.empty((vis.size, n_comp, n_wl), dtype=np.float64)
@@ -347,9 +462,19 @@ def _spectra_kernel(altitude, ground_range, visibility, *, path, interpolation, 
         def at(a, g, v=v):
             return cube[v, a, g].astype(np.float64)
 
-        low_gr = _interp(at(a0[s], g0[s]), at(a1[s], g0[s]), wa[s], alt_rule)
-        high_gr = _interp(at(a0[s], g1[s]), at(a1[s], g1[s]), wa[s], alt_rule)
-        out[s] = _interp(low_gr, high_gr, wg[s], gr_rule)
+        # altitude at both bracketing ground ranges first, then ground range (pyBSM's order)
+        out[s] = _two_steps((at(a0[s], g0[s]), at(a1[s], g0[s])),
+                            (at(a0[s], g1[s]), at(a1[s], g1[s])),
+                            (wa[s], wa[s]), wg[s], (alt_rule, gr_rule))
+        if along is not None:
+            ((l0, l1, lw), (h0, h1, hw)), weight, usable = along
+            # ground range inside each table first, then altitude along the line of sight
+            path_values = _two_steps((at(a0[s], l0[s]), at(a0[s], l1[s])),
+                                     (at(a1[s], h0[s]), at(a1[s], h1[s])),
+                                     (lw[s], hw[s]), weight[s], ("log", "log"))
+            keep = usable[s][:, None]
+            for c in _ALONG_PATH:
+                out[s, c] = np.where(keep, path_values[:, c], out[s, c])
     return out.reshape(shape + (n_comp, n_wl))
 
 

@@ -114,6 +114,12 @@ FLAGS = MappingProxyType({
         "the system OTF exceeds 0.05 at the reference image's Nyquist frequency: the "
         "reference does not resolve what the camera resolves (the simulation lacks detail)",
     ),
+    "atmosphere_fallback": (
+        1048576,
+        "atmosphere_interpolation='same-elevation' could not follow the line of sight to "
+        "both bracketing altitude tables (horizon or end of a table's coverage): the "
+        "atmosphere was interpolated at fixed ground range ('log-linear') instead",
+    ),
 })
 
 INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive", "rer_nonpositive",
@@ -132,7 +138,7 @@ CALIBRATION = (
 """Bits saying a number is outside a GIQE's calibration (or off the NIIRS scale)."""
 
 NOTICE = ("atmosphere_sparse", "well_fill_limited", "partial_spectral_coverage",
-          "image_flat")
+          "image_flat", "atmosphere_fallback")
 """Bits that are neither: information about how a number was obtained."""
 
 INVALID_MASK = sum(FLAGS[name][0] for name in INVALID)
