@@ -552,7 +552,8 @@ METHOD_BAD = {
 KNOB_CHOICES = {
     "edge_otf": ("abs", "real"), "filter_otf": ("pybsm", "dtft"),
     "edge_rule": ("uniform_trapezoid", "gauss_legendre"),
-    "band_edges": ("exact", "interpolated"), "atmosphere_interpolation": ("linear", "log-linear"),
+    "band_edges": ("exact", "interpolated"),
+    "atmosphere_interpolation": ("linear", "log-linear", "same-elevation"),
     "turbulence_path_rule": ("trapezoid", "gauss-legendre"), "elevation": ("look-down", "target"),
 }
 KNOB_VALID_EXTREMES = {("otf_wavelengths", 1)}  # one OTF wavelength: crude but documented

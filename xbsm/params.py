@@ -349,7 +349,7 @@ def _check_shared_dims(values, kind: str, indexes=None) -> None:
     seen = {}
     for name, value in values.items():
         own = value.indexes if indexes is None else indexes[name]
-        for dim, size in zip(value.dims, value.shape):
+        for dim, size in zip(value.dims, value.shape, strict=True):
             index = own.get(dim)
             if dim not in seen:
                 seen[dim] = (name, size, index)
