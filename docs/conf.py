@@ -53,6 +53,7 @@ autosummary_generate = True
 autosummary_imported_members = False
 autodoc_typehints = "none"          # numpydoc shows the documented types
 autodoc_default_options = {"member-order": "bysource"}
+autodoc_preserve_defaults = True    # signatures show GIQE5_CALIBRATION, not its long repr
 numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 numpydoc_xref_param_type = False
@@ -75,8 +76,15 @@ html_title = f"xbsm {version}"
 html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
-    "secondary_sidebar_items": ["page-toc"],
+    # one function per generated API page: its table of contents would be one line,
+    # so the column goes to the text and the equations instead
+    "secondary_sidebar_items": {"*": ["page-toc"], "auto_examples/*": ["page-toc"],
+                                "generated/*": []},
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
 }
 html_show_sourcelink = False
+# pages without sub-pages have nothing for a section navigation to list
+html_sidebars = {page: [] for page in (
+    "quickstart", "concepts", "guide", "api", "flags", "migration", "quirks", "example1",
+    "example2", "validation")}
