@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import pkgutil
 import re
+import runpy
 from pathlib import Path
 
 import pytest
@@ -16,6 +18,12 @@ from xbsm.methods import Method
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 PAGES = ("index", "guide", "migration", "quirks", "flags", "api", "validation", "study",
          "example1", "measure", "simulate")
+# Pages of the documentation site (docs/conf.py) besides the ones above; Sphinx itself
+# refuses (with -W) a page that no table of contents includes.
+SITE_PAGES = ("quickstart", "concepts", "stages", "geometry", "radiometry", "noise", "niirs",
+              "performance", "reference")
+GALLERY = sorted((DOCS / "gallery").glob("plot_*.py"))
+ROOT = DOCS.parent
 
 # Modules whose public functions docs/api.md must list, one by one.
 API_MODULES = (
@@ -75,7 +83,7 @@ def test_every_page_exists_and_index_links_to_each():
 
 
 def test_relative_links_between_pages_resolve():
-    for page in PAGES:
+    for page in PAGES + SITE_PAGES:
         for target in re.findall(r"\]\(([^)#:]+)(?:#[^)]*)?\)", read(page)):
             assert (DOCS / target).exists(), (page, target)
 
@@ -89,7 +97,8 @@ def test_guide_examples_run_in_order(tmp_path, monkeypatch):
         exec(compile(block, f"docs/guide.md block {number}", "exec"), namespace)
 
 
-@pytest.mark.parametrize("page", ["migration", "flags", "validation"])
+@pytest.mark.parametrize("page", ["migration", "flags", "validation", "quickstart", "concepts",
+                                  "geometry", "radiometry", "noise", "niirs"])
 def test_examples_of_other_pages_run(page, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     namespace: dict = {"__name__": page}
@@ -118,7 +127,7 @@ def test_migration_table_has_every_pybsm_keyword(table):
 
 def test_every_xbsm_name_in_backticks_exists():
     pattern = re.compile(r"`(xbsm(?:\.[A-Za-z_][A-Za-z0-9_]*)+)")
-    for page in PAGES:
+    for page in PAGES + SITE_PAGES:
         for dotted in set(pattern.findall(read(page))):
             resolve(dotted)
 
@@ -155,3 +164,67 @@ def test_validation_page_figure4_numbers_are_what_xbsm_gives():
 def test_flags_page_example_values_match_the_code():
     # docs/flags.md: the bits of 36 are gsd_out_of_range and well_fill_limited
     assert flags.flag("gsd_out_of_range") | flags.flag("well_fill_limited") == 36
+
+
+def reference_modules() -> list[str]:
+    """The modules docs/reference.md hands to autosummary (recursively, with submodules)."""
+    listing = re.search(r":recursive:\n\n(.*?)^```", read("reference"), flags=re.S | re.M)
+    return listing.group(1).split()
+
+
+def test_generated_reference_covers_every_public_module():
+    # The site's API pages are generated from the docstrings of the modules listed in
+    # docs/reference.md and of their submodules: every public module must be reached,
+    # and every module docs/api.md describes must be one of them.
+    listed = reference_modules()
+    public = [m.name for m in pkgutil.walk_packages(xbsm.__path__, "xbsm.")
+              if not any(part.startswith("_") for part in m.name.split("."))]
+    for name in public + list(API_MODULES):
+        assert any(name == top or name.startswith(top + ".") for top in listed), name
+    for top in listed:
+        importlib.import_module(top)
+
+
+def test_reference_entry_points_are_the_top_level_names():
+    # docs/reference.md's entry-point table names where each top-level function lives
+    entries = re.search(r"## Entry points.*?:nosignatures:\n\n(.*?)^```", read("reference"),
+                        flags=re.S | re.M).group(1).split()
+    objects = {id(resolve(name)) for name in entries}
+    for name in ("sensor", "scenario", "snr", "niirs", "system_otf", "method", "Method",
+                 "open_atmosphere", "atmosphere_at", "simulate_image"):
+        assert id(getattr(xbsm, name)) in objects, name
+
+
+def test_readme_and_ci_build_the_docs_with_one_command():
+    # the README's build command is the one .ci/run executes, with warnings as errors
+    command = ('pip install -e ".[docs]" && python -m sphinx -W --keep-going docs '
+               "docs/_build/html")
+    assert command in (ROOT / "README.md").read_text()
+    assert f"    {command}\n" in (ROOT / ".ci" / "run").read_text()
+    assert "docs_build\n" in (ROOT / ".ci" / "run").read_text()
+
+
+def test_gallery_has_the_five_examples():
+    # docs/gallery: range performance, focal-length trade, noise and MTF breakdowns,
+    # a simulated image stack over range (issue 11)
+    assert [p.stem for p in GALLERY] == [
+        "plot_focal_length_trade", "plot_image_stack", "plot_mtf_breakdown",
+        "plot_noise_breakdown", "plot_range_performance"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("script", GALLERY, ids=[p.stem for p in GALLERY])
+def test_gallery_script_runs_and_draws(script, tmp_path, monkeypatch):
+    # each gallery script runs as sphinx-gallery runs it and leaves at least one figure
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    monkeypatch.chdir(tmp_path)
+    plt.close("all")
+    try:
+        runpy.run_path(str(script), run_name="__main__")
+        assert plt.get_fignums(), script.name
+    finally:
+        plt.close("all")
