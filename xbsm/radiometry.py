@@ -218,7 +218,7 @@ def _apply(kernel, args, *, wavelength=None, curves=(), spectral=(True,), **knob
     core = [[curve_dims[i]] if i in curve_dims
             else ["wavelength"] if "wavelength" in getattr(a, "dims", ()) else []
             for i, a in enumerate(args)]
-    common = {"kwargs": knobs, "join": "inner", "dask": "parallelized",
+    common = {"kwargs": knobs, "join": _join(args), "dask": "parallelized",
               "output_dtypes": [float] * len(spectral)}
     if wavelength is None or not any(core):
         out = xr.apply_ufunc(kernel, *args, output_core_dims=[[]] * len(spectral), **common)
@@ -242,6 +242,27 @@ def _apply(kernel, args, *, wavelength=None, curves=(), spectral=(True,), **knob
                  for o, s in zip(out if isinstance(out, tuple) else (out,), spectral,
                                  strict=True))
     return outs if len(outs) > 1 else outs[0]
+
+
+def _join(objects, otherwise: str = "inner") -> str:
+    """How to align ``objects``: as xarray would (``otherwise``), without its copies.
+
+    When the objects' indexes already agree, an inner or outer join changes nothing
+    but copies every object; "exact" then gives the same result without the copies.
+    """
+    seen = {}
+    for a in objects:
+        for dim, index in getattr(a, "xindexes", {}).items():
+            first = seen.setdefault(dim, index)
+            if first is not index and not first.equals(index):
+                return otherwise
+    return "exact"
+
+
+def _dataset(variables: dict) -> xr.Dataset:
+    """``xr.Dataset(variables)``, without copying variables whose indexes already agree."""
+    return xr.merge([variables], join=_join(variables.values(), "outer"),
+                    compat="broadcast_equals", combine_attrs="override")
 
 
 def _dimension_order(args, curve_dims):
@@ -695,7 +716,7 @@ def sensor_band_terms(sensor: xr.Dataset, wavelength: xr.DataArray,
         s["cold_filter_transmission"], s["optics_emissivity"], s["optics_temperature"],
         s["cold_filter_emissivity"], s["cold_filter_temperature"], s["stray_irradiance"]),
         wavelength=wavelength, curves=[(9, "stray_irradiance")], **_planck_knobs(constants))
-    return xr.Dataset({
+    return _dataset({
         "optics_transmission": named(optics, "1", "optics transmission on the band"),
         "quantum_efficiency": named(
             resample_spectral(s["quantum_efficiency"], wavelength, "quantum_efficiency"),
@@ -777,7 +798,7 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
         wavelength=wavelength, spectral=(False,), **knobs)
     own = _apply(_rate_kernel, (*detector[:4], band["sensor_irradiance"]),
                  wavelength=wavelength, spectral=(False,), **knobs)
-    return xr.Dataset({
+    return _dataset({
         **{name: named(value, units, long_name) for value, (name, units, long_name) in zip(
             counts, _COUNT_TERMS, strict=True)},
         "spectral_weights": named(spectral, "s-1 m-1", "target spectral photoelectron rate"),
