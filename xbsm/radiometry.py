@@ -51,19 +51,19 @@ def _total_radiance_kernel(path_thermal, reflectance, wavelength, temperature, t
 
 
 def _throughput_kernel(focal_length, aperture_diameter):
-    """pi / (1 + 4 F^2)."""
+    """Projected solid angle of the optics, pi / (1 + 4 F^2)."""
     return np.pi / (1.0 + 4.0 * (focal_length / aperture_diameter) ** 2.0)
 
 
 def _focal_plane_kernel(radiance, focal_length, aperture_diameter):
-    """L pi / (1 + 4 F^2), in that rounding order."""
+    """Irradiance from a radiance filling the pupil, L pi / (1 + 4 F^2), in that order."""
     # (L * pi) / (1 + 4F^2), pyBSM's rounding order: contrast SNRs near 1e-7 are
     # differences of nearly equal counts and keep only that order's bits
     return radiance * np.pi / (1.0 + 4.0 * (focal_length / aperture_diameter) ** 2.0)
 
 
 def _cold_shield_kernel(focal_length, aperture_diameter, wavelength, temperature, *, h, c, k):
-    """(pi - pi / (1 + 4 F^2)) L_bb(T)."""
+    """Cold shield emission outside the optics' cone, (pi - pi / (1 + 4 F^2)) L_bb(T)."""
     solid = np.pi - _throughput_kernel(focal_length, aperture_diameter)
     return solid * _blackbody_kernel(wavelength, temperature, h=h, c=c, k=k)
 
