@@ -1,8 +1,15 @@
 """Radiometry: from aperture radiance to photoelectrons (paper Sec. 2.1-2.2).
 
-One physical quantity per function; plain xarray arithmetic that broadcasts
-over ``wavelength`` and any scenario or sensor dimension. Spectral radiance is
-in W/(m^2 sr m), spectral irradiance in W/(m^2 m).
+One physical quantity per public function, broadcasting over ``wavelength`` and
+any scenario or sensor dimension. Spectral radiance is in W/(m^2 sr m),
+spectral irradiance in W/(m^2 m).
+
+The arithmetic lives in private numpy kernels (plain arrays and plain knobs, no
+checks); each public function runs its kernel once through :func:`_apply`, the
+xarray boundary that aligns, labels and carries dask. A kernel writes its
+operations in the order of the equation it implements, so a result keeps the
+rounding and the dimension order that xarray arithmetic on the same equation
+would give.
 """
 
 from __future__ import annotations
@@ -26,6 +33,256 @@ EMISSIVE_BAND_START = 2.9e-6
 """Bands starting at or beyond this wavelength use the emissive GIQE target
 (reflectance 0, so only the 282 K / 280 K temperature contrast counts). [m]"""
 
+
+# ---- numpy kernels: plain arrays (broadcast against each other) and plain knobs ----
+
+def _blackbody_kernel(wavelength, temperature, *, h, c, k):
+    """Planck spectral radiance, written with exp(-x) so that it underflows to 0."""
+    x = h * c / (wavelength * k * temperature)
+    return (2.0 * h * c**2.0 / wavelength**5.0) * np.exp(-x) / -np.expm1(-x)
+
+
+def _total_radiance_kernel(path_thermal, reflectance, wavelength, temperature, transmission,
+                           solar_scatter, ground_reflected, *, h, c, k):
+    """Paper Eq. 1 on arrays."""
+    emitted = (1.0 - reflectance) * _blackbody_kernel(wavelength, temperature, h=h, c=c, k=k)
+    return (path_thermal + emitted * transmission + solar_scatter
+            + ground_reflected * (reflectance / DATABASE_REFLECTANCE))
+
+
+def _throughput_kernel(focal_length, aperture_diameter):
+    """Projected solid angle of the optics, pi / (1 + 4 F^2)."""
+    return np.pi / (1.0 + 4.0 * (focal_length / aperture_diameter) ** 2.0)
+
+
+def _focal_plane_kernel(radiance, focal_length, aperture_diameter):
+    """Irradiance from a radiance filling the pupil, L pi / (1 + 4 F^2), in that order."""
+    # (L * pi) / (1 + 4F^2), pyBSM's rounding order: contrast SNRs near 1e-7 are
+    # differences of nearly equal counts and keep only that order's bits
+    return radiance * np.pi / (1.0 + 4.0 * (focal_length / aperture_diameter) ** 2.0)
+
+
+def _cold_shield_kernel(focal_length, aperture_diameter, wavelength, temperature, *, h, c, k):
+    """Cold shield emission outside the optics' cone, (pi - pi / (1 + 4 F^2)) L_bb(T)."""
+    solid = np.pi - _throughput_kernel(focal_length, aperture_diameter)
+    return solid * _blackbody_kernel(wavelength, temperature, h=h, c=c, k=k)
+
+
+def _cold_stop_kernel(emissivity, wavelength, temperature, focal_length, aperture_diameter,
+                      *, h, c, k):
+    """Cold stop emission through the optics' cone."""
+    radiance = emissivity * _blackbody_kernel(wavelength, temperature, h=h, c=c, k=k)
+    return _focal_plane_kernel(radiance, focal_length, aperture_diameter)
+
+
+def _optics_emission_kernel(cold_filter_transmission, emissivity, wavelength, temperature,
+                            focal_length, aperture_diameter, *, h, c, k):
+    """Warm optics emission through the cold filter and the optics' cone."""
+    radiance = (cold_filter_transmission * emissivity
+                * _blackbody_kernel(wavelength, temperature, h=h, c=c, k=k))
+    return _focal_plane_kernel(radiance, focal_length, aperture_diameter)
+
+
+def _sensor_irradiance_kernel(focal_length, aperture_diameter, wavelength,
+                              cold_shield_temperature, cold_filter_transmission,
+                              optics_emissivity, optics_temperature, cold_filter_emissivity,
+                              cold_filter_temperature, stray_irradiance, *, h, c, k):
+    """Self-emission of cold shield, optics and cold stop, plus stray light (Eq. 2)."""
+    f, d, knobs = focal_length, aperture_diameter, {"h": h, "c": c, "k": k}
+    return (_cold_shield_kernel(f, d, wavelength, cold_shield_temperature, **knobs)
+            + _optics_emission_kernel(cold_filter_transmission, optics_emissivity, wavelength,
+                                      optics_temperature, f, d, **knobs)
+            + _cold_stop_kernel(cold_filter_emissivity, wavelength, cold_filter_temperature,
+                                f, d, **knobs)
+            + stray_irradiance)
+
+
+def _optics_transmission_kernel(cold_filter_transmission, obscuration_ratio, optics):
+    """Transmission of cold filter, obscured pupil and optics."""
+    return cold_filter_transmission * (1.0 - obscuration_ratio**2) * optics
+
+
+def _detector_irradiance_kernel(optics_transmission, radiance, focal_length,
+                                aperture_diameter, sensor_irradiance):
+    """Scene irradiance through the optics plus the sensor's own (Eq. 2)."""
+    scene = _focal_plane_kernel(radiance, focal_length, aperture_diameter)
+    return optics_transmission * scene + sensor_irradiance
+
+
+def _photon_rate_kernel(wavelength, quantum_efficiency, width_x, width_y, irradiance, *, h, c):
+    """Spectral photoelectron rate, IBSM Eq. 3-42."""
+    return (wavelength / (h * c)) * quantum_efficiency * width_x * width_y * irradiance
+
+
+def _trapezoid_kernel(spectral, wavelength):
+    """Trapezoid rule along the last axis (xarray's ``integrate`` formula)."""
+    step = wavelength[1:] - wavelength[:-1]
+    return np.sum(step * 0.5 * (spectral[..., 1:] + spectral[..., :-1]), axis=-1)
+
+
+def _rate_kernel(wavelength, quantum_efficiency, width_x, width_y, irradiance, *, h, c):
+    """Band-integrated photoelectron rate of a spectral irradiance (last axis)."""
+    spectral = _photon_rate_kernel(wavelength, quantum_efficiency, width_x, width_y,
+                                   irradiance, h=h, c=c)
+    return _trapezoid_kernel(spectral, wavelength)
+
+
+def _scene_kernel(wavelength, quantum_efficiency, width_x, width_y, optics_transmission,
+                  radiance, focal_length, aperture_diameter, sensor_irradiance, *, h, c):
+    """Spectral and band photoelectron rate of a scene radiance; and without the sensor's own."""
+    irradiance = _detector_irradiance_kernel(optics_transmission, radiance, focal_length,
+                                             aperture_diameter, sensor_irradiance)
+    detector = (wavelength, quantum_efficiency, width_x, width_y)
+    spectral = _photon_rate_kernel(*detector, irradiance, h=h, c=c)
+    scene = _rate_kernel(*detector, irradiance - sensor_irradiance, h=h, c=c)
+    return spectral, _trapezoid_kernel(spectral, wavelength), scene
+
+
+def _path_rate_kernel(wavelength, quantum_efficiency, width_x, width_y, optics_transmission,
+                      path_thermal, solar_scatter, focal_length, aperture_diameter, *, h, c):
+    """Band photoelectron rate of the path radiance through the optics."""
+    path = optics_transmission * _focal_plane_kernel(path_thermal + solar_scatter,
+                                                     focal_length, aperture_diameter)
+    return _rate_kernel(wavelength, quantum_efficiency, width_x, width_y, path, h=h, c=c)
+
+
+def _well_fill_kernel(photoelectrons, max_well_fill, max_well):
+    """Scale factor (<= 1) that keeps the count under the well-fill limit."""
+    limit = max_well_fill * max_well
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(photoelectrons > limit, limit / photoelectrons, 1.0)
+
+
+def _counts_kernel(target_rate, dark_current, integration_time, tdi_stages, background_rate,
+                   max_well_fill, max_well):
+    """Counts of target and background after the well-fill limit (pyBSM's operation order)."""
+    full_target = (target_rate + dark_current) * integration_time * tdi_stages
+    full_background = (background_rate + dark_current) * integration_time * tdi_stages
+    scale = _well_fill_kernel(np.maximum(full_target, full_background), max_well_fill,
+                              max_well)
+    target, background = scale * full_target, scale * full_background
+    return target, background, target - background, scale * integration_time, scale
+
+
+def _interp_kernel(curve, target, *, source):
+    """``np.interp(target, source, row, left=0, right=0)`` for every row of ``curve`` at once.
+
+    ``curve`` varies along its last axis, sampled at the increasing ``source``; the
+    result varies along its last axis at ``target``. Same formula and rounding as
+    ``np.interp``: exact on the nodes, ``slope * (x - x_j) + y_j`` between them.
+    """
+    target = np.asarray(target)
+    inside = (target >= source[0]) & (target <= source[-1])
+    node = np.clip(np.searchsorted(source, target, side="right") - 1, 0, source.size - 1)
+    on_node = target == source[node]
+    if source.size == 1:
+        return np.where(on_node, curve[..., node], 0.0)
+    low = np.minimum(node, source.size - 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = (curve[..., low + 1] - curve[..., low]) / (source[low + 1] - source[low])
+        between = slope * (target - source[low]) + curve[..., low]
+    return np.where(inside, np.where(on_node, curve[..., node], between), 0.0)
+
+
+# ---- the xarray boundary ------------------------------------------------------------
+
+def _apply(kernel, args, *, wavelength=None, curves=(), spectral=(True,), **knobs):
+    """Run a numpy kernel once over its arguments, broadcast and labelled as xarray would.
+
+    Parameters
+    ----------
+    kernel : callable
+        Plain numpy function of ``args`` (positionally) and ``knobs``.
+    args : sequence of float or xr.DataArray
+        In the order in which their operands appear in the kernel's equation: that
+        order gives the results their dimension order (xarray arithmetic's rule).
+    wavelength : xr.DataArray, optional
+        The band's wavelengths. When given and an argument varies with them (or is a
+        sensor curve), ``wavelength`` is a core dimension: the kernel sees it as the
+        last axis of every argument (length 1 where one does not vary with it) and
+        may integrate over it.
+    curves : sequence of (int, str)
+        Position in ``args`` and parameter name of each argument that may be a sensor
+        curve over ``<name>_wavelength``; a curve reaches the kernel resampled onto
+        ``wavelength`` (:func:`resample_spectral`'s rule).
+    spectral : sequence of bool
+        One per kernel output: whether it keeps ``wavelength`` (else a band total).
+
+    Returns
+    -------
+    xr.DataArray, float or tuple of them
+        Without attributes; inputs backed by dask give lazy dask results.
+    """
+    curve_dims = {i: f"{name}_wavelength" for i, name in curves
+                  if f"{name}_wavelength" in getattr(args[i], "dims", ())}
+    core = [[curve_dims[i]] if i in curve_dims
+            else ["wavelength"] if "wavelength" in getattr(a, "dims", ()) else []
+            for i, a in enumerate(args)]
+    common = {"kwargs": knobs, "join": _join(args), "dask": "parallelized",
+              "output_dtypes": [float] * len(spectral)}
+    if wavelength is None or not any(core):
+        out = xr.apply_ufunc(kernel, *args, output_core_dims=[[]] * len(spectral), **common)
+        return out
+    sources = {i: args[i][dim].values for i, dim in curve_dims.items()}
+
+    def over_wavelength(*arrays):
+        *arrays, target = arrays
+        return kernel(*(_interp_kernel(a, target, source=sources[i]) if i in sources
+                        else a if core[i] else np.asarray(a)[..., np.newaxis]
+                        for i, a in enumerate(arrays)), **knobs)
+
+    common["kwargs"] = {}
+    out = xr.apply_ufunc(
+        over_wavelength, *args, wavelength,
+        input_core_dims=[*core, ["wavelength"]],
+        output_core_dims=[["wavelength"] if s else [] for s in spectral],
+        dask_gufunc_kwargs={"allow_rechunk": True}, **common)
+    order = _dimension_order(args, curve_dims)
+    outs = tuple(o.transpose(*order) if s and o.dims != order else o
+                 for o, s in zip(out if isinstance(out, tuple) else (out,), spectral,
+                                 strict=True))
+    return outs if len(outs) > 1 else outs[0]
+
+
+def _join(objects, otherwise: str = "inner") -> str:
+    """How to align ``objects``: as xarray would (``otherwise``), without its copies.
+
+    When the objects' indexes already agree, an inner or outer join changes nothing
+    but copies every object; "exact" then gives the same result without the copies.
+    """
+    seen = {}
+    for a in objects:
+        for dim, index in getattr(a, "xindexes", {}).items():
+            first = seen.setdefault(dim, index)
+            if first is not index and not first.equals(index):
+                return otherwise
+    return "exact"
+
+
+def _dataset(variables: dict) -> xr.Dataset:
+    """``xr.Dataset(variables)``, without copying variables whose indexes already agree."""
+    return xr.merge([variables], join=_join(variables.values(), "outer"),
+                    compat="broadcast_equals", combine_attrs="override")
+
+
+def _dimension_order(args, curve_dims):
+    """Dimensions in order of first appearance, a resampled curve's ``wavelength`` last."""
+    order = {}
+    for i, a in enumerate(args):
+        dims = getattr(a, "dims", ())
+        if i in curve_dims:
+            dims = (*(d for d in dims if d != curve_dims[i]), "wavelength")
+        order.update(dict.fromkeys(dims))
+    order.setdefault("wavelength")
+    return tuple(order)
+
+
+def _planck_knobs(constants: Constants) -> dict:
+    """The constants the kernels take, as plain floats."""
+    return {"h": constants.planck, "c": constants.speed_of_light, "k": constants.boltzmann}
+
+
+# ---- public functions ----------------------------------------------------------------
 
 def blackbody_radiance(wavelength, temperature, constants: Constants = CODATA):
     r"""Blackbody spectral radiance (Planck's law).
@@ -52,9 +309,7 @@ def blackbody_radiance(wavelength, temperature, constants: Constants = CODATA):
     IBSM Eq. 3-35. Written with :math:`e^{-x}` so that it underflows
     gracefully to 0 instead of overflowing when :math:`\lambda T` is small.
     """
-    h, c, k = constants.planck, constants.speed_of_light, constants.boltzmann
-    x = h * c / (wavelength * k * temperature)
-    out = (2.0 * h * c**2.0 / wavelength**5.0) * np.exp(-x) / -np.expm1(-x)
+    out = _apply(_blackbody_kernel, (wavelength, temperature), **_planck_knobs(constants))
     return named(out, "W m-2 sr-1 m-1", "blackbody spectral radiance")
 
 
@@ -86,14 +341,10 @@ def total_radiance(atmosphere: xr.Dataset, reflectance, temperature, constants=C
     SURF_EMIS column is not used: the target's own emission is
     :math:`(1-r)L_{bb}\tau`.
     """
-    wavelength = atmosphere["wavelength"]
-    emitted = (1.0 - reflectance) * blackbody_radiance(wavelength, temperature, constants)
-    out = (
-        atmosphere["path_thermal"]
-        + emitted * atmosphere["transmission"]
-        + atmosphere["solar_scatter"]
-        + atmosphere["ground_reflected"] * (reflectance / DATABASE_REFLECTANCE)
-    )
+    a = atmosphere
+    out = _apply(_total_radiance_kernel, (
+        a["path_thermal"], reflectance, a["wavelength"], temperature, a["transmission"],
+        a["solar_scatter"], a["ground_reflected"]), **_planck_knobs(constants))
     return named(out, "W m-2 sr-1 m-1", "spectral radiance at the aperture")
 
 
@@ -162,7 +413,7 @@ def throughput_factor(aperture_diameter, focal_length):
     -----
     Schott's form of IBSM Eq. 3-34, valid for fast optics too (paper Eq. 2).
     """
-    out = np.pi / (1.0 + 4.0 * (focal_length / aperture_diameter) ** 2.0)
+    out = _apply(_throughput_kernel, (focal_length, aperture_diameter))
     return named(out, "sr", "focal-plane throughput factor")
 
 
@@ -185,9 +436,7 @@ def focal_plane_irradiance(radiance, aperture_diameter, focal_length):
     -----
     .. math:: E = L\,\frac{\pi}{1 + 4 (f/D)^2}
     """
-    # (L * pi) / (1 + 4F^2), pyBSM's rounding order: contrast SNRs near 1e-7 are
-    # differences of nearly equal counts and keep only that order's bits
-    out = radiance * np.pi / (1.0 + 4.0 * (focal_length / aperture_diameter) ** 2.0)
+    out = _apply(_focal_plane_kernel, (radiance, focal_length, aperture_diameter))
     return named(out, "W m-2 m-1", "focal-plane spectral irradiance")
 
 
@@ -215,8 +464,8 @@ def cold_shield_self_emission(wavelength, cold_shield_temperature, aperture_diam
     -----
     .. math:: E = \left(\pi - \frac{\pi}{1 + 4F^2}\right) L_{bb}(T_{cs})
     """
-    solid = np.pi - throughput_factor(aperture_diameter, focal_length)
-    out = solid * blackbody_radiance(wavelength, cold_shield_temperature, constants)
+    out = _apply(_cold_shield_kernel, (focal_length, aperture_diameter, wavelength,
+                                       cold_shield_temperature), **_planck_knobs(constants))
     return named(out, "W m-2 m-1", "cold shield self-emission irradiance")
 
 
@@ -242,10 +491,9 @@ def cold_stop_self_emission(wavelength, cold_filter_temperature, cold_filter_emi
     xr.DataArray
         [W m-2 m-1]
     """
-    radiance = cold_filter_emissivity * blackbody_radiance(
-        wavelength, cold_filter_temperature, constants
-    )
-    out = focal_plane_irradiance(radiance, aperture_diameter, focal_length)
+    out = _apply(_cold_stop_kernel, (cold_filter_emissivity, wavelength, cold_filter_temperature,
+                                     focal_length, aperture_diameter),
+                 **_planck_knobs(constants))
     return named(out, "W m-2 m-1", "cold stop self-emission irradiance")
 
 
@@ -272,12 +520,9 @@ def optics_self_emission(wavelength, optics_temperature, optics_emissivity,
     xr.DataArray
         [W m-2 m-1]
     """
-    radiance = (
-        cold_filter_transmission
-        * optics_emissivity
-        * blackbody_radiance(wavelength, optics_temperature, constants)
-    )
-    out = focal_plane_irradiance(radiance, aperture_diameter, focal_length)
+    out = _apply(_optics_emission_kernel, (cold_filter_transmission, optics_emissivity,
+                                           wavelength, optics_temperature, focal_length,
+                                           aperture_diameter), **_planck_knobs(constants))
     return named(out, "W m-2 m-1", "optics self-emission irradiance")
 
 
@@ -305,14 +550,9 @@ def photon_detection_rate(irradiance, quantum_efficiency, detector_width_x,
     -----
     .. math:: \frac{dN}{d\lambda} = \frac{\lambda}{hc}\,\eta(\lambda)\,w_x w_y\,E(\lambda)
     """
-    wavelength = irradiance["wavelength"]
-    out = (
-        (wavelength / (constants.planck * constants.speed_of_light))
-        * quantum_efficiency
-        * detector_width_x
-        * detector_width_y
-        * irradiance
-    )
+    out = _apply(_photon_rate_kernel, (irradiance["wavelength"], quantum_efficiency,
+                                       detector_width_x, detector_width_y, irradiance),
+                 h=constants.planck, c=constants.speed_of_light)
     return named(out, "s-1 m-1", "spectral photoelectron rate")
 
 
@@ -329,7 +569,9 @@ def band_integral(spectral: xr.DataArray) -> xr.DataArray:
     xr.DataArray
         [X]; ``units`` and ``long_name`` follow from the integrand's, when it has them.
     """
-    out = spectral.integrate("wavelength")
+    wavelength = spectral["wavelength"]
+    out = _apply(_trapezoid_kernel, (spectral, wavelength), wavelength=wavelength,
+                 spectral=(False,))
     units = spectral.attrs.get("units")
     if units is None:
         return out
@@ -379,9 +621,7 @@ def well_fill_scale(photoelectrons, max_well, max_well_fill):
     xr.DataArray
         Scale factor for integration time and counts. [1]
     """
-    limit = max_well_fill * max_well
-    with np.errstate(divide="ignore", invalid="ignore"):
-        out = xr.where(photoelectrons > limit, limit / photoelectrons, 1.0)
+    out = _apply(_well_fill_kernel, (photoelectrons, max_well_fill, max_well))
     return named(out, "1", "well-fill integration time scale")
 
 
@@ -407,22 +647,13 @@ def resample_spectral(values, wavelength: xr.DataArray, name: str):
     dim = f"{name}_wavelength"
     if dim not in values.dims:
         return values
-    source = values[dim].values
-
-    def _interp(curve, target):
-        return np.interp(target, source, curve, left=0.0, right=0.0)
-
     out = xr.apply_ufunc(
-        _interp,
-        values,
-        wavelength,
-        input_core_dims=[[dim], ["wavelength"]],
-        output_core_dims=[["wavelength"]],
-        vectorize=True,
-        dask="parallelized",
-        output_dtypes=[float],
-    )
-    return out.assign_coords(wavelength=wavelength).assign_attrs(values.attrs)
+        _interp_kernel, values, wavelength, kwargs={"source": values[dim].values},
+        input_core_dims=[[dim], ["wavelength"]], output_core_dims=[["wavelength"]],
+        keep_attrs=True, dask="parallelized", output_dtypes=[float])
+    if "wavelength" not in out.coords:
+        out = out.assign_coords(wavelength=wavelength)
+    return out
 
 
 def aperture_radiances(atmosphere: xr.Dataset, scenario: xr.Dataset, targets: str,
@@ -477,20 +708,15 @@ def sensor_band_terms(sensor: xr.Dataset, wavelength: xr.DataArray,
         shield, optics and cold stop, plus stray light) [W m-2 m-1] (paper Eq. 2).
     """
     s = sensor
-    diameter, focal = s["aperture_diameter"], s["focal_length"]
-    optics = (s["cold_filter_transmission"] * (1.0 - s["obscuration_ratio"] ** 2)
-              * resample_spectral(s["optics_transmission"], wavelength, "optics_transmission"))
-    self_emission = (
-        cold_shield_self_emission(wavelength, s["cold_shield_temperature"], diameter, focal,
-                                  constants)
-        + optics_self_emission(wavelength, s["optics_temperature"], s["optics_emissivity"],
-                               s["cold_filter_transmission"], diameter, focal, constants)
-        + cold_stop_self_emission(wavelength, s["cold_filter_temperature"],
-                                  s["cold_filter_emissivity"], diameter, focal, constants)
-    )
-    sensor_irradiance = self_emission + resample_spectral(s["stray_irradiance"], wavelength,
-                                                          "stray_irradiance")
-    return xr.Dataset({
+    optics = _apply(_optics_transmission_kernel, (
+        s["cold_filter_transmission"], s["obscuration_ratio"], s["optics_transmission"]),
+        wavelength=wavelength, curves=[(2, "optics_transmission")])
+    sensor_irradiance = _apply(_sensor_irradiance_kernel, (
+        s["focal_length"], s["aperture_diameter"], wavelength, s["cold_shield_temperature"],
+        s["cold_filter_transmission"], s["optics_emissivity"], s["optics_temperature"],
+        s["cold_filter_emissivity"], s["cold_filter_temperature"], s["stray_irradiance"]),
+        wavelength=wavelength, curves=[(9, "stray_irradiance")], **_planck_knobs(constants))
+    return _dataset({
         "optics_transmission": named(optics, "1", "optics transmission on the band"),
         "quantum_efficiency": named(
             resample_spectral(s["quantum_efficiency"], wavelength, "quantum_efficiency"),
@@ -517,8 +743,9 @@ def detector_irradiance(radiance, band: xr.Dataset, sensor: xr.Dataset):
     xr.DataArray
         [W m-2 m-1]
     """
-    scene = focal_plane_irradiance(radiance, sensor["aperture_diameter"], sensor["focal_length"])
-    out = band["optics_transmission"] * scene + band["sensor_irradiance"]
+    out = _apply(_detector_irradiance_kernel, (
+        band["optics_transmission"], radiance, sensor["focal_length"],
+        sensor["aperture_diameter"], band["sensor_irradiance"]))
     return named(out, "W m-2 m-1", "focal-plane spectral irradiance")
 
 
@@ -550,41 +777,45 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
         ``background_scene_rate`` (scene plus path, without the sensor's own
         irradiance) and ``sensor_rate`` [s-1].
     """
-    s, k = sensor, constants
+    s, wavelength = sensor, atmosphere["wavelength"]
     if band is None:
-        band = sensor_band_terms(s, atmosphere["wavelength"], k)
-    other = band["sensor_irradiance"]
-
-    def rate(irradiance):
-        return band_integral(photon_detection_rate(
-            irradiance, band["quantum_efficiency"], s["detector_width_x"],
-            s["detector_width_y"], k))
-
-    target_irradiance = detector_irradiance(target_radiance, band, s)
-    background_irradiance = detector_irradiance(background_radiance, band, s)
-    spectral = photon_detection_rate(target_irradiance, band["quantum_efficiency"],
-                                     s["detector_width_x"], s["detector_width_y"], k)
-    t, stages = s["integration_time"], s["tdi_stages"]  # pyBSM's operation order (parity)
-    full_target = (band_integral(spectral) + s["dark_current"]) * t * stages
-    full_background = (rate(background_irradiance) + s["dark_current"]) * t * stages
-    scale = well_fill_scale(np.maximum(full_target, full_background), s["max_well"],
-                            s["max_well_fill"])
-    n_target, n_background = scale * full_target, scale * full_background
-    path = band["optics_transmission"] * focal_plane_irradiance(
-        path_radiance(atmosphere), s["aperture_diameter"], s["focal_length"])
-    return xr.Dataset({
-        "target_photoelectrons": named(n_target, "count", "target photoelectrons"),
-        "background_photoelectrons": named(n_background, "count", "background photoelectrons"),
-        "contrast_photoelectrons": named(n_target - n_background, "count",
-                                         "contrast photoelectrons"),
-        "effective_integration_time": named(scale * s["integration_time"], "s",
-                                   "integration time after the well-fill limit"),
-        "well_fill_scale": scale,
+        band = sensor_band_terms(s, wavelength, constants)
+    detector = (wavelength, band["quantum_efficiency"], s["detector_width_x"],
+                s["detector_width_y"], band["optics_transmission"])
+    optics = (s["focal_length"], s["aperture_diameter"], band["sensor_irradiance"])
+    knobs = {"h": constants.planck, "c": constants.speed_of_light}
+    spectral, target_rate, target_scene = _apply(
+        _scene_kernel, (*detector, target_radiance, *optics), wavelength=wavelength,
+        spectral=(True, False, False), **knobs)
+    _, background_rate, background_scene = _apply(
+        _scene_kernel, (*detector, background_radiance, *optics), wavelength=wavelength,
+        spectral=(True, False, False), **knobs)
+    counts = _apply(_counts_kernel, (
+        target_rate, s["dark_current"], s["integration_time"], s["tdi_stages"],
+        background_rate, s["max_well_fill"], s["max_well"]), spectral=(False,) * 5)
+    path = _apply(_path_rate_kernel, (
+        *detector, atmosphere["path_thermal"], atmosphere["solar_scatter"], *optics[:2]),
+        wavelength=wavelength, spectral=(False,), **knobs)
+    own = _apply(_rate_kernel, (*detector[:4], band["sensor_irradiance"]),
+                 wavelength=wavelength, spectral=(False,), **knobs)
+    return _dataset({
+        **{name: named(value, units, long_name) for value, (name, units, long_name) in zip(
+            counts, _COUNT_TERMS, strict=True)},
         "spectral_weights": named(spectral, "s-1 m-1", "target spectral photoelectron rate"),
-        "path_rate": named(rate(path), "s-1", "path radiance photoelectron rate"),
-        "target_scene_rate": named(rate(target_irradiance - other), "s-1",
+        "path_rate": named(path, "s-1", "path radiance photoelectron rate"),
+        "target_scene_rate": named(target_scene, "s-1",
                                    "target scene and path photoelectron rate"),
-        "background_scene_rate": named(rate(background_irradiance - other), "s-1",
+        "background_scene_rate": named(background_scene, "s-1",
                                        "background scene and path photoelectron rate"),
-        "sensor_rate": named(rate(other), "s-1", "self-emission and stray photoelectron rate"),
+        "sensor_rate": named(own, "s-1", "self-emission and stray photoelectron rate"),
     })
+
+
+_COUNT_TERMS = (
+    ("target_photoelectrons", "count", "target photoelectrons"),
+    ("background_photoelectrons", "count", "background photoelectrons"),
+    ("contrast_photoelectrons", "count", "contrast photoelectrons"),
+    ("effective_integration_time", "s", "integration time after the well-fill limit"),
+    ("well_fill_scale", "1", "well-fill integration time scale"),
+)
+"""Name, units and long name of each output of :func:`_counts_kernel`."""
