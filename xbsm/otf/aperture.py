@@ -7,7 +7,7 @@ import xarray as xr
 from scipy.special import jv
 
 from .._metadata import described
-from .spectral import _finite, _positive, _require
+from .spectral import _finite, _labelled, _positive, _require
 
 __all__ = ["circular_aperture", "defocused_aperture", "defocus_wavefront_coefficient"]
 
@@ -65,14 +65,30 @@ def circular_aperture(fx, fy, wavelength, aperture_diameter, obscuration_ratio=0
     _positive("wavelength", wavelength)
     _positive("aperture_diameter", aperture_diameter)
     _require("obscuration_ratio", obscuration_ratio, lambda a: (a >= 0) & (a < 1), "in [0, 1)")
-    cutoff = aperture_diameter / wavelength
-    nu = np.hypot(fx, fy) / cutoff
+    out = _labelled(_circular_aperture_xy_kernel, fx, fy, aperture_diameter, wavelength,
+                    obscuration_ratio)
+    return described(out, circular_aperture)
+
+
+def _circular_aperture_xy_kernel(fx, fy, aperture_diameter, wavelength, obscuration_ratio):
+    """:func:`_circular_aperture_kernel` at the radial frequency of ``fx``, ``fy`` (numpy)."""
+    return _circular_aperture_kernel(np.hypot(fx, fy), aperture_diameter, wavelength,
+                                     obscuration_ratio)
+
+
+def _circular_aperture_kernel(radial, aperture_diameter, wavelength, obscuration_ratio):
+    """IBSM Eq. 3-20 on plain arrays: radial frequency [cycles/rad], D [m], lambda [m], eta [1].
+
+    Entries with eta = 0 reduce to the unobscured term exactly (the obscured terms
+    are set to 0 there and the divisions guarded).
+    """
+    nu = radial / (aperture_diameter / wavelength)
     unobscured = _diffraction_term(nu)
-    eta = obscuration_ratio
-    if not isinstance(eta, xr.DataArray) and eta == 0:
-        return described(unobscured, circular_aperture)
-    # eta = 0 entries of a sweep: every obscured term vanishes; guard the divisions only.
-    eta_safe = xr.where(eta > 0, eta, 1.0) if isinstance(eta, xr.DataArray) else eta
+    eta = np.asarray(obscuration_ratio, dtype=float)
+    if not np.any(eta > 0):
+        return unobscured + np.zeros_like(eta)  # exact: adds 0 and eta's axes
+    obscured = eta > 0
+    eta_safe = np.where(obscured, eta, 1.0)
     eta2 = eta**2
     inner = eta2 * _diffraction_term(nu / eta_safe)
     cos_phi = (1.0 + eta2 - 4.0 * nu**2) / (2.0 * eta_safe)
@@ -84,12 +100,10 @@ def circular_aperture(fx, fy, wavelength, aperture_diameter, obscuration_ratio=0
         - (2.0 * (1.0 - eta2) / np.pi) * np.arctan((1.0 + eta) / (1.0 - eta) * np.tan(phi / 2.0))
     )
     lower, upper = (1.0 - eta) / 2.0, (1.0 + eta) / 2.0
-    overlap = xr.where(nu < lower, -2.0 * eta2, xr.where(nu <= upper, transition, 0.0))
-    if isinstance(eta, xr.DataArray):
-        overlap = xr.where(eta > 0, overlap, 0.0)
-        inner = xr.where(eta > 0, inner, 0.0)
-    out = (unobscured + inner + overlap) / (1.0 - eta2)
-    return described(out, circular_aperture)
+    overlap = np.where(nu < lower, -2.0 * eta2, np.where(nu <= upper, transition, 0.0))
+    overlap = np.where(obscured, overlap, 0.0)
+    inner = np.where(obscured, inner, 0.0)
+    return (unobscured + inner + overlap) / (1.0 - eta2)
 
 
 def defocus_wavefront_coefficient(focus_shift, aperture_diameter, focal_length):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._metadata import described
-from .spectral import _positive, _require, _sinc
+from .spectral import _labelled, _positive, _require
 
 __all__ = ["detector", "aggregated_detector", "charge_transfer", "diffusion"]
 
@@ -37,8 +37,14 @@ def detector(fx, fy, detector_width_x, detector_width_y, focal_length):
     _positive("detector_width_x", detector_width_x)
     _positive("detector_width_y", detector_width_y)
     _positive("focal_length", focal_length)
-    out = _sinc(detector_width_x / focal_length * fx) * _sinc(detector_width_y / focal_length * fy)
+    out = _labelled(_detector_kernel, detector_width_x, focal_length, fx, detector_width_y, fy)
     return described(out, detector)
+
+
+def _detector_kernel(detector_width_x, focal_length, fx, detector_width_y, fy):
+    """IBSM Eq. 3-36 on plain arrays (arguments in the order of the result's dims)."""
+    return (np.sinc(detector_width_x / focal_length * fx)
+            * np.sinc(detector_width_y / focal_length * fy))
 
 
 def _aggregation_factor(frequency, pitch, focal_length, n):
@@ -96,14 +102,21 @@ def aggregated_detector(
     _require("aggregation", aggregation, lambda a: a >= 1, "an integer >= 1")
     _positive("pixel_pitch_x", pixel_pitch_x)
     _positive("pixel_pitch_y", pixel_pitch_y)
-    pixel = detector(fx, fy, detector_width_x, detector_width_y, focal_length)
-    n = int(aggregation)
-    out = (
-        _aggregation_factor(fx, pixel_pitch_x, focal_length, n)
-        * _aggregation_factor(fy, pixel_pitch_y, focal_length, n)
-        * pixel
-    )
+    _positive("detector_width_x", detector_width_x)
+    _positive("detector_width_y", detector_width_y)
+    _positive("focal_length", focal_length)
+    out = _labelled(_aggregated_detector_kernel, pixel_pitch_x, fx, focal_length, pixel_pitch_y,
+                    fy, detector_width_x, detector_width_y, aggregation=int(aggregation))
     return described(out, aggregated_detector)
+
+
+def _aggregated_detector_kernel(pixel_pitch_x, fx, focal_length, pixel_pitch_y, fy,
+                                detector_width_x, detector_width_y, aggregation):
+    """Aggregated pixel OTF on plain arrays (arguments in the order of the result's dims)."""
+    pixel = _detector_kernel(detector_width_x, focal_length, fx, detector_width_y, fy)
+    return (_aggregation_factor(fx, pixel_pitch_x, focal_length, aggregation)
+            * _aggregation_factor(fy, pixel_pitch_y, focal_length, aggregation)
+            * pixel)
 
 
 def charge_transfer(
@@ -153,6 +166,14 @@ def charge_transfer(
     _require("transfers_y", transfers_y, lambda a: a >= 0, ">= 0")
     _require("transfer_efficiency", transfer_efficiency, lambda a: (a >= 0) & (a <= 1), "in [0, 1]")
     _positive("phases", phases)
+    out = _labelled(_charge_transfer_kernel, phases, transfer_efficiency, transfers_x,
+                    pixel_pitch_x, fx, focal_length, transfers_y, pixel_pitch_y, fy)
+    return described(out, charge_transfer)
+
+
+def _charge_transfer_kernel(phases, transfer_efficiency, transfers_x, pixel_pitch_x, fx,
+                            focal_length, transfers_y, pixel_pitch_y, fy):
+    """IBSM Eq. 3-39 on plain arrays (arguments in the order of the result's dims)."""
     loss = phases * (1.0 - transfer_efficiency)
 
     def axis(transfers, pitch, frequency):
@@ -160,8 +181,7 @@ def charge_transfer(
             -loss * transfers * (1.0 - np.cos(2.0 * np.pi * pitch * frequency / focal_length))
         )
 
-    out = axis(transfers_x, pixel_pitch_x, fx) * axis(transfers_y, pixel_pitch_y, fy)
-    return described(out, charge_transfer)
+    return axis(transfers_x, pixel_pitch_x, fx) * axis(transfers_y, pixel_pitch_y, fy)
 
 
 def diffusion(fx, fy, absorption_coefficient, depletion_width, diffusion_length, focal_length):
@@ -201,6 +221,14 @@ def diffusion(fx, fy, absorption_coefficient, depletion_width, diffusion_length,
     _require("depletion_width", depletion_width, lambda a: a >= 0, ">= 0")
     _positive("diffusion_length", diffusion_length)
     _positive("focal_length", focal_length)
+    out = _labelled(_diffusion_kernel, absorption_coefficient, depletion_width, diffusion_length,
+                    fx, fy, focal_length)
+    return described(out, diffusion)
+
+
+def _diffusion_kernel(absorption_coefficient, depletion_width, diffusion_length, fx, fy,
+                      focal_length):
+    """IBSM Eq. 3-40 on plain arrays (arguments in the order of the result's dims)."""
     rho = np.hypot(fx, fy)
     length = (1.0 / diffusion_length**2 + (2.0 * np.pi * rho / focal_length) ** 2) ** -0.5
     depletion = np.exp(-absorption_coefficient * depletion_width)
@@ -208,5 +236,4 @@ def diffusion(fx, fy, absorption_coefficient, depletion_width, diffusion_length,
     def collected(diffusion_len):
         return 1.0 - depletion / (1.0 + absorption_coefficient * diffusion_len)
 
-    out = collected(length) / collected(diffusion_length)
-    return described(out, diffusion)
+    return collected(length) / collected(diffusion_length)

@@ -8,7 +8,7 @@ from scipy import fft as sp_fft
 from scipy.interpolate import RegularGridInterpolator
 
 from .._metadata import described
-from .spectral import _nonnegative, _positive
+from .spectral import _labelled, _nonnegative, _positive
 
 __all__ = ["gaussian", "sharpening_filter", "FILTER_METHODS"]
 
@@ -44,8 +44,13 @@ def gaussian(fx, fy, blur_size_x, blur_size_y):
     """
     _nonnegative("blur_size_x", blur_size_x)
     _nonnegative("blur_size_y", blur_size_y)
-    out = np.exp(-np.pi * ((fx * blur_size_x) ** 2 + (fy * blur_size_y) ** 2))
+    out = _labelled(_gaussian_kernel, fx, blur_size_x, fy, blur_size_y)
     return described(out, gaussian)
+
+
+def _gaussian_kernel(fx, blur_size_x, fy, blur_size_y):
+    """Gaussian OTF on plain arrays (arguments in the order of the result's dims)."""
+    return np.exp(-np.pi * ((fx * blur_size_x) ** 2 + (fy * blur_size_y) ** 2))
 
 
 def _as_kernel(kernel) -> np.ndarray:
@@ -128,22 +133,22 @@ def sharpening_filter(fx, fy, kernel, ifov_x, ifov_y=None, method="dtft"):
     if method == "pybsm":
         if isinstance(ifov_x, xr.DataArray):
             raise ValueError("ifov_x must be a float for method='pybsm'")
-        out = xr.apply_ufunc(
-            _pybsm_filter_kernel,
-            fx,
-            fy,
-            kwargs={"kernel": k, "ifov": float(ifov_x)},
-            dask="parallelized",
-            output_dtypes=[float],
-        )
+        out = _labelled(_pybsm_filter_kernel, fx, fy, kernel=k, ifov=float(ifov_x))
         return described(out, sharpening_filter)
     if ifov_y is None:
         ifov_y = ifov_x
-    rows, cols = k.shape
-    offset_y = xr.DataArray(np.arange(rows) - rows // 2, dims="kernel_y")
-    offset_x = xr.DataArray(np.arange(cols) - cols // 2, dims="kernel_x")
-    weights = xr.DataArray(k, dims=("kernel_y", "kernel_x"))
-    phase_x = np.exp(-2j * np.pi * (fx * ifov_x) * offset_x)
-    phase_y = np.exp(-2j * np.pi * (fy * ifov_y) * offset_y)
-    out = xr.dot(phase_y, weights, phase_x, dim=["kernel_y", "kernel_x"])
+    out = _labelled(_dtft_filter_kernel, fy, ifov_y, fx, ifov_x, kernel=k, dtype=complex)
     return described(out, sharpening_filter)
+
+
+def _dtft_filter_kernel(fy, ifov_y, fx, ifov_x, kernel):
+    """Discrete-space Fourier transform of ``kernel`` on plain arrays (paper Sec. 2.4).
+
+    Arguments in the order of the result's dims; ``kernel`` rows run along y.
+    """
+    rows, cols = kernel.shape
+    offset_y = np.arange(rows) - rows // 2
+    offset_x = np.arange(cols) - cols // 2
+    phase_x = np.exp(-2j * np.pi * (fx * ifov_x)[..., None] * offset_x)
+    phase_y = np.exp(-2j * np.pi * (fy * ifov_y)[..., None] * offset_y)
+    return np.einsum("...i,ij,...j->...", phase_y, kernel, phase_x)

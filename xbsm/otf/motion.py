@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-import xarray as xr
 
 from .._metadata import described
-from .spectral import _finite, _nonnegative, _positive, _require, _sinc
+from .spectral import _finite, _labelled, _nonnegative, _positive, _require
 
 __all__ = ["jitter", "drift", "tdi"]
 
@@ -35,8 +34,13 @@ def jitter(fx, fy, jitter_rms_x, jitter_rms_y):
     """
     _nonnegative("jitter_rms_x", jitter_rms_x)
     _nonnegative("jitter_rms_y", jitter_rms_y)
-    out = np.exp(-2.0 * np.pi**2 * (jitter_rms_x**2 * fx**2 + jitter_rms_y**2 * fy**2))
+    out = _labelled(_jitter_kernel, jitter_rms_x, fx, jitter_rms_y, fy)
     return described(out, jitter)
+
+
+def _jitter_kernel(jitter_rms_x, fx, jitter_rms_y, fy):
+    """IBSM Eq. 3-28 on plain arrays (arguments in the order of the result's dims)."""
+    return np.exp(-2.0 * np.pi**2 * (jitter_rms_x**2 * fx**2 + jitter_rms_y**2 * fy**2))
 
 
 def drift(fx, fy, drift_x, drift_y):
@@ -64,8 +68,13 @@ def drift(fx, fy, drift_x, drift_y):
     """
     _finite("drift_x", drift_x)
     _finite("drift_y", drift_y)
-    out = _sinc(drift_x * fx) * _sinc(drift_y * fy)
+    out = _labelled(_drift_kernel, drift_x, fx, drift_y, fy)
     return described(out, drift)
+
+
+def _drift_kernel(drift_x, fx, drift_y, fy):
+    """IBSM Eq. 3-29 on plain arrays (arguments in the order of the result's dims)."""
+    return np.sinc(drift_x * fx) * np.sinc(drift_y * fy)
 
 
 def tdi(frequency, detector_width, focal_length, stages, rate_ratio, phases=1):
@@ -119,14 +128,20 @@ def tdi(frequency, detector_width, focal_length, stages, rate_ratio, phases=1):
         lambda a: (a >= 1) & (a == np.round(a)),
         "such that stages * phases is a positive integer",
     )
+    out = _labelled(_tdi_kernel, detector_width, frequency, focal_length, rate_ratio, stages,
+                    phases, dtype=complex)
+    return described(out, tdi)
+
+
+def _tdi_kernel(detector_width, frequency, focal_length, rate_ratio, stages, phases):
+    """IBSM Eq. 3-38 in closed form on plain arrays (arguments in the order of the dims)."""
     m = stages * phases
     x = detector_width * frequency / (focal_length * rate_ratio)
     y = x * (rate_ratio - 1.0)
     s = np.sin(np.pi * y)
     near_zero = np.abs(s) < 1e-8
-    safe = xr.where(near_zero, 1.0, s) if isinstance(s, xr.DataArray) else np.where(near_zero, 1, s)
-    ratio = xr.where(
+    safe = np.where(near_zero, 1.0, s)
+    ratio = np.where(
         near_zero, np.cos(np.pi * m * y) / np.cos(np.pi * y), np.sin(np.pi * m * y) / (m * safe)
     )
-    out = _sinc(x) * np.exp(-1j * np.pi * (m - 1.0) * y) * ratio
-    return described(out, tdi)
+    return np.sinc(x) * np.exp(-1j * np.pi * (m - 1.0) * y) * ratio

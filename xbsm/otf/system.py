@@ -17,10 +17,12 @@ import math
 import numpy as np
 import xarray as xr
 
-from .._contract import contract
 from .._metadata import named
 from ..methods import Method
-from . import aperture, detector, filters, motion, turbulence, wavefront
+from . import aperture, filters, motion, turbulence, wavefront
+from .detector import _detector_kernel
+from .motion import _jitter_kernel
+from .spectral import _labelled, _spectral
 
 ORIENTATION = xr.DataArray(["x", "y"], dims="orientation", name="orientation")
 """The two slice directions the GIQE uses: along x (fx = f) and along y (fy = f)."""
@@ -122,58 +124,121 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
     else:
         fx, fy_ = frequency, fy
         radial = np.hypot(frequency, fy)
-    zero = xr.zeros_like(radial)
     wavelength = spectral_weights["wavelength"]
     wl, w = spectral_bins(wavelength, spectral_weights, method.otf_wavelengths)
     wl = xr.DataArray(np.asarray(wl), dims="wavelength", coords={"wavelength": np.asarray(wl)})
     w = w / w.sum("wavelength")
-    diameter = s["aperture_diameter"]
-
-    # sensor quantities: evaluated once per sensor, then weighted per scenario
-    mono_aperture = aperture.circular_aperture(radial, zero, wl, diameter, s["obscuration_ratio"])
-    ap = contract(mono_aperture, w, "wavelength")
-    mono_wavefront = wavefront.random_phase_wavefront(
-        fx, fy_, wl, s["wavefront_variance"], s["wavefront_correlation_length_x"],
-        s["wavefront_correlation_length_y"], s["wavefront_wavelength"],
-    )
-    wav = contract(mono_wavefront, w, "wavelength")
-    det = detector.detector(fx, fy_, s["detector_width_x"], s["detector_width_y"],
-                            s["focal_length"])
-    jit = motion.jitter(fx, fy_, s["jitter_x"], s["jitter_y"])
-    exposure = integration_time * s["tdi_stages"]
-    dri = motion.drift(fx, fy_, s["drift_rate_x"] * exposure, s["drift_rate_y"] * exposure)
-    fil = _filter(s, fx, fy_, method)
-
-    # turbulence: path r0 at 1 um, scaled per wavelength, blended by wind, weighted
-    cn2 = sc["cn2_at_1m"]
-    turbulent = cn2 > 0
-    r0_ref = turbulence.slant_path_coherence_diameter(
-        slant_range, sc["altitude"], 0.0, sc["high_altitude_wind_speed"],
-        xr.where(turbulent, cn2, 1.0e-14), path_samples=method.turbulence_path_samples,
-        rule=method.turbulence_path_rule, geometry_form=method.geometry,
-    )
-    turb = turbulence.polychromatic_turbulence(
-        radial, zero, wl, w, diameter, r0_ref, exposure, sc["platform_speed"])
-    turb = xr.where(turbulent, turb, 1.0)
-    r0_band = named(xr.where(
-        turbulent, turbulence.band_coherence_diameter(r0_ref, wl, w), np.inf
-    ), "m", "band-weighted coherence diameter r0")
-
     parts = {
-        "aperture": named(ap, "1", "aperture OTF"),
-        "turbulence": named(turb, "1", "turbulence OTF"),
-        "detector": named(det, "1", "detector OTF"),
-        "jitter": named(jit, "1", "jitter OTF"),
-        "drift": named(dri, "1", "drift OTF"),
-        "wavefront": named(wav, "1", "wavefront OTF"),
+        # sensor quantities, weighted per scenario where they depend on wavelength
+        "aperture": _spectral(_aperture_band_kernel, radial, s["aperture_diameter"],
+                              s["obscuration_ratio"], wl, w),
+        "turbulence": None,
+        "detector": _labelled(_detector_kernel, s["detector_width_x"], s["focal_length"], fx,
+                              s["detector_width_y"], fy_),
+        "jitter": _labelled(_jitter_kernel, s["jitter_x"], fx, s["jitter_y"], fy_),
+        "drift": _labelled(_exposure_drift_kernel, s["drift_rate_x"], integration_time,
+                           s["tdi_stages"], fx, s["drift_rate_y"], fy_),
+        "wavefront": _spectral(_wavefront_band_kernel, s["wavefront_variance"],
+                               s["wavefront_wavelength"], fx, s["wavefront_correlation_length_x"],
+                               fy_, s["wavefront_correlation_length_y"], wl, w),
     }
-    unfiltered = math.prod(parts.values())
-    parts["filter"] = named(fil, "1", "post-processing filter OTF")
-    out = xr.Dataset(parts)
-    out["system_unfiltered"] = named(unfiltered, "1", "system OTF without the filter")
-    out["system"] = named(unfiltered * fil, "1", "system OTF")
-    out["coherence_diameter"] = r0_band
+    parts["turbulence"], r0_band = _turbulence(s, sc, radial, wl, w, integration_time,
+                                               slant_range, method)
+    unfiltered = _labelled(_product_kernel, *parts.values())
+    fil = _filter(s, fx, fy_, method)
+    system = _labelled(np.multiply, unfiltered, fil,
+                       dtype=np.result_type(unfiltered.dtype, fil.dtype))
+    out = xr.Dataset({**{name: _otf(part, f"{name} OTF") for name, part in parts.items()},
+                      "filter": _otf(fil, "post-processing filter OTF")})
+    out["system_unfiltered"] = _otf(unfiltered, "system OTF without the filter")
+    out["system"] = _otf(system, "system OTF")
+    out["coherence_diameter"] = named(r0_band, "m", "band-weighted coherence diameter r0")
     return out
+
+
+def _otf(out: xr.DataArray, long_name: str) -> xr.DataArray:
+    """A freshly computed OTF with its CF attributes (set in place: nobody else holds it)."""
+    out.attrs = {"units": "1", "long_name": long_name}
+    return out
+
+
+def _turbulence(s, sc, radial, wl, w, integration_time, slant_range, method: Method):
+    """Polychromatic turbulence OTF and band r0: path r0 at 1 um, scaled, wind-blended, weighted.
+
+    Scenarios without turbulence (``cn2_at_1m`` = 0) get an OTF of 1 and an infinite r0.
+    """
+    cn2 = sc["cn2_at_1m"]
+    r0_ref = _labelled(_turbulent_path_kernel, sc["high_altitude_wind_speed"], slant_range,
+                       sc["altitude"], cn2,
+                       nodes=turbulence._path_nodes(method.turbulence_path_samples,
+                                                    method.turbulence_path_rule),
+                       form=method.geometry)
+    otf = _spectral(_turbulence_band_kernel, cn2, radial, r0_ref, integration_time,
+                    s["tdi_stages"], sc["platform_speed"], s["aperture_diameter"], wl, w)
+    r0_band = _spectral(_band_r0_kernel, cn2, r0_ref, wl, w)
+    return otf, r0_band
+
+
+def _last(a):
+    """``a`` as an array with a new last axis (for broadcasting against wavelength)."""
+    return np.asarray(a)[..., None]
+
+
+def _aperture_band_kernel(radial, aperture_diameter, obscuration_ratio, wl, w):
+    """Aperture OTF weighted over the last (wavelength) axis by normalised ``w`` (numpy)."""
+    mono = aperture._circular_aperture_kernel(_last(np.hypot(radial, 0.0)),
+                                              _last(aperture_diameter), wl,
+                                              _last(obscuration_ratio))
+    return np.einsum("...k,...k->...", mono, w)
+
+
+def _wavefront_band_kernel(variance, variance_wavelength, fx, length_x, fy, length_y, wl, w):
+    """Random-phase wavefront OTF weighted over the last (wavelength) axis (numpy)."""
+    mono = wavefront._random_phase_kernel(_last(variance), _last(variance_wavelength), wl,
+                                          _last(fx), _last(length_x), _last(fy), _last(length_y))
+    return np.einsum("...k,...k->...", mono, w)
+
+
+def _exposure_drift_kernel(drift_rate_x, integration_time, tdi_stages, fx, drift_rate_y, fy):
+    """Drift OTF over the exposure of all TDI stages (numpy)."""
+    exposure = integration_time * tdi_stages
+    return motion._drift_kernel(drift_rate_x * exposure, fx, drift_rate_y * exposure, fy)
+
+
+def _turbulent_path_kernel(wind_speed, slant_range, altitude, cn2, *, nodes, form):
+    """Path r0 at 1 um of a target on the ground; a stand-in Cn2 where there is none (numpy)."""
+    cn2 = np.where(cn2 > 0, cn2, 1.0e-14)
+    return turbulence._slant_path_kernel(turbulence.REFERENCE_WAVELENGTH, wind_speed,
+                                         slant_range, altitude, 0.0, cn2, nodes=nodes, form=form)
+
+
+def _turbulence_band_kernel(cn2, radial, r0_ref, integration_time, tdi_stages, speed, diameter,
+                            wl, w):
+    """Wind-blended turbulence OTF weighted over wavelength; 1 where cn2 = 0 (numpy)."""
+    otf = turbulence._polychromatic_kernel(
+        np.hypot(radial, 0.0), r0_ref, integration_time * tdi_stages, speed, diameter,
+        turbulence.REFERENCE_WAVELENGTH, wl, w)
+    return np.where(cn2 > 0, otf, 1.0)
+
+
+def _band_r0_kernel(cn2, r0_ref, wl, w):
+    """Band-weighted r0; infinite where cn2 = 0 (numpy)."""
+    r0 = turbulence._band_kernel(r0_ref, turbulence.REFERENCE_WAVELENGTH, wl, w)
+    return np.where(cn2 > 0, r0, np.inf)
+
+
+def _product_kernel(*factors):
+    return math.prod(factors)
+
+
+def _ones_kernel(fx, fy):
+    return np.ones(np.broadcast_shapes(np.shape(fx), np.shape(fy)))
+
+
+def _sampled_filter_kernel(fy, pixel_pitch_y, focal_length, fx, pixel_pitch_x, *, kernel):
+    """The sharpening filter at the detector's sample spacing (numpy)."""
+    return filters._dtft_filter_kernel(fy, pixel_pitch_y / focal_length, fx,
+                                       pixel_pitch_x / focal_length, kernel=kernel)
 
 
 def _filter(sensor, fx, fy, method: Method):
@@ -183,14 +248,17 @@ def _filter(sensor, fx, fy, method: Method):
     # pyBSM 0.16.1 skips kernels with a single row (common_OTFs: shape[0] > 1)
     pybsm_skips = method.filter_otf == "pybsm" and kernel.sizes["kernel_y"] == 1
     if identity or pybsm_skips:
-        return xr.ones_like(fx * fy)
-    ifov_x = sensor["pixel_pitch_x"] / sensor["focal_length"]
-    ifov_y = sensor["pixel_pitch_y"] / sensor["focal_length"]
+        return _labelled(_ones_kernel, fx, fy)
+    k = np.asarray(kernel.values, dtype=float)
+    pitch_x, pitch_y, focal = (sensor[n] for n in ("pixel_pitch_x", "pixel_pitch_y",
+                                                   "focal_length"))
     if method.filter_otf == "pybsm":
-        if ifov_x.ndim:
+        if pitch_x.ndim or focal.ndim:
             raise ValueError(
                 "method filter_otf='pybsm' cannot sweep pixel_pitch_x or focal_length "
                 "with a filter kernel; use filter_otf='dtft'"
             )
-        return filters.sharpening_filter(fx, fy, kernel.values, float(ifov_x), method="pybsm")
-    return filters.sharpening_filter(fx, fy, kernel.values, ifov_x, ifov_y, method="dtft")
+        return _labelled(filters._pybsm_filter_kernel, fx, fy, kernel=k,
+                         ifov=float(pitch_x) / float(focal))
+    return _labelled(_sampled_filter_kernel, fy, pitch_y, focal, fx, pitch_x, kernel=k,
+                     dtype=complex)

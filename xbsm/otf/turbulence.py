@@ -7,7 +7,14 @@ import xarray as xr
 
 from .._metadata import described
 from ..geometry import altitude_along_path
-from .spectral import _nonnegative, _positive, _require, spectral_average
+from .spectral import (
+    _labelled,
+    _nonnegative,
+    _positive,
+    _require,
+    _spectral,
+    _weighted_sum_kernel,
+)
 
 __all__ = [
     "hufnagel_valley",
@@ -52,13 +59,18 @@ def hufnagel_valley(altitude, high_altitude_wind_speed=21.0, cn2_at_1m=1.7e-14):
               + 2.7\times10^{-16} e^{-h/1500} + C_n^2(1\,\mathrm{m})\, e^{-h/100}
     """
     _nonnegative("cn2_at_1m", cn2_at_1m)
+    out = _labelled(_hufnagel_valley_kernel, high_altitude_wind_speed, altitude, cn2_at_1m)
+    return described(out, hufnagel_valley, units="m-2/3")
+
+
+def _hufnagel_valley_kernel(high_altitude_wind_speed, altitude, cn2_at_1m):
+    """Hufnagel-Valley Cn2 on plain arrays (arguments in the order of the result's dims)."""
     h = altitude
-    out = (
+    return (
         5.94e-53 * (high_altitude_wind_speed / 27.0) ** 2 * h**10 * np.exp(-h / 1000.0)
         + 2.7e-16 * np.exp(-h / 1500.0)
         + cn2_at_1m * np.exp(-h / 100.0)
     )
-    return described(out, hufnagel_valley, units="m-2/3")
 
 
 def _r0_from_integral(integral, wavelength):
@@ -181,25 +193,34 @@ def slant_path_coherence_diameter(
     _positive("slant_range", slant_range)
     _positive("cn2_at_1m", cn2_at_1m)
     _positive("wavelength", wavelength)
-    t, w = _path_nodes(int(path_samples), rule)
-    t = xr.DataArray(t, dims="path")
-    w = xr.DataArray(w, dims="path")
-    # Geometry on plain ndarrays: xbsm.geometry clips with np.clip, which is not a
-    # ufunc and would compute dask-backed DataArrays.
-    heights = xr.apply_ufunc(
-        altitude_along_path,
-        t * slant_range,
-        slant_range,
-        sensor_altitude,
-        target_altitude,
-        kwargs={"form": geometry_form},
-        dask="parallelized",
-        output_dtypes=[float],
-    )
-    cn2 = hufnagel_valley(heights, high_altitude_wind_speed, cn2_at_1m)
-    integral = xr.dot(cn2, w * t ** (5.0 / 3.0), dim="path") * slant_range
-    out = _r0_from_integral(integral, wavelength)
+    out = _labelled(_slant_path_kernel, wavelength, high_altitude_wind_speed, slant_range,
+                    sensor_altitude, target_altitude, cn2_at_1m,
+                    nodes=_path_nodes(int(path_samples), rule), form=geometry_form)
     return described(out, slant_path_coherence_diameter, units="m")
+
+
+def _slant_path_kernel(wavelength, high_altitude_wind_speed, slant_range, sensor_altitude,
+                       target_altitude, cn2_at_1m, *, nodes, form):
+    """Slant-path r0 on plain arrays; ``nodes`` = (t, weights) of :func:`_path_nodes`.
+
+    Arguments in the order of the result's dims. The path runs along a new first axis.
+    """
+    t, w = nodes
+    shape = np.broadcast_shapes(*(np.shape(a) for a in (
+        wavelength, high_altitude_wind_speed, slant_range, sensor_altitude, target_altitude,
+        cn2_at_1m)))
+    along = (slice(None),) + (None,) * len(shape)
+
+    def on_path(a):
+        return np.asarray(a, dtype=float)[None, ...]
+
+    # geometry on plain ndarrays: xbsm.geometry clips with np.clip, which is not a ufunc
+    heights = altitude_along_path(t[along] * slant_range, on_path(slant_range),
+                                  on_path(sensor_altitude), on_path(target_altitude), form=form)
+    cn2 = _hufnagel_valley_kernel(on_path(high_altitude_wind_speed), heights,
+                                  on_path(cn2_at_1m))
+    integral = np.einsum("k...,k->...", cn2, w * t ** (5.0 / 3.0)) * slant_range
+    return _r0_from_integral(integral, wavelength)
 
 
 def scale_coherence_diameter(
@@ -228,8 +249,13 @@ def scale_coherence_diameter(
     _positive("coherence_diameter", coherence_diameter)
     _positive("wavelength", wavelength)
     _positive("reference_wavelength", reference_wavelength)
-    out = coherence_diameter * (wavelength / reference_wavelength) ** (6.0 / 5.0)
+    out = _labelled(_scale_kernel, coherence_diameter, wavelength, reference_wavelength)
     return described(out, scale_coherence_diameter, units="m")
+
+
+def _scale_kernel(coherence_diameter, wavelength, reference_wavelength):
+    """r0 scaled as lambda^(6/5) on plain arrays."""
+    return coherence_diameter * (wavelength / reference_wavelength) ** (6.0 / 5.0)
 
 
 def band_coherence_diameter(
@@ -259,9 +285,23 @@ def band_coherence_diameter(
 
     .. math:: \bar r_0 = \sum_\lambda w(\lambda)\, r_0(\lambda)
     """
-    r0 = scale_coherence_diameter(coherence_diameter, wavelength, reference_wavelength)
-    out = spectral_average(r0, weights)
+    _positive("coherence_diameter", coherence_diameter)
+    _positive("wavelength", wavelength)
+    _positive("reference_wavelength", reference_wavelength)
+    if not isinstance(weights, xr.DataArray) or "wavelength" not in weights.dims:
+        raise ValueError("weights must be a DataArray with dimension 'wavelength'")
+    _nonnegative("weights", weights)
+    _require("weights", weights.sum("wavelength"), lambda a: a > 0,
+             "not all zero along 'wavelength'")
+    out = _spectral(_band_kernel, coherence_diameter, reference_wavelength, wavelength, weights)
     return described(out, band_coherence_diameter, units="m")
+
+
+def _band_kernel(coherence_diameter, reference_wavelength, wavelength, weights):
+    """Weighted mean of r0(lambda) over the last (wavelength) axis, on plain arrays."""
+    r0 = _scale_kernel(coherence_diameter[..., None], wavelength,
+                       np.asarray(reference_wavelength)[..., None])
+    return _weighted_sum_kernel(r0, weights)
 
 
 def turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, exposure_coefficient=0.0):
@@ -302,13 +342,26 @@ def turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, exposu
     _require(
         "exposure_coefficient", exposure_coefficient, lambda a: (a >= 0) & (a <= 1), "in [0, 1]"
     )
-    rho = np.hypot(fx, fy)
-    out = np.exp(
-        -3.44
-        * (wavelength / coherence_diameter * rho) ** (5.0 / 3.0)
-        * (1.0 - exposure_coefficient * (wavelength / aperture_diameter * rho) ** (1.0 / 3.0))
-    )
+    out = _labelled(_turbulence_xy_kernel, wavelength, coherence_diameter, fx, fy,
+                    exposure_coefficient, aperture_diameter)
     return described(out, turbulence)
+
+
+def _turbulence_xy_kernel(wavelength, coherence_diameter, fx, fy, exposure_coefficient,
+                          aperture_diameter):
+    """:func:`_turbulence_kernel` at hypot(fx, fy) (arguments in the order of the dims)."""
+    return _turbulence_kernel(np.hypot(fx, fy), wavelength, aperture_diameter,
+                              coherence_diameter, exposure_coefficient)
+
+
+def _turbulence_kernel(radial, wavelength, aperture_diameter, coherence_diameter,
+                       exposure_coefficient):
+    """IBSM Eq. 3-3 on plain arrays, at radial frequency ``radial`` >= 0 [cycles/rad]."""
+    return np.exp(
+        -3.44
+        * (wavelength / coherence_diameter * radial) ** (5.0 / 3.0)
+        * (1.0 - exposure_coefficient * (wavelength / aperture_diameter * radial) ** (1.0 / 3.0))
+    )
 
 
 def wind_blended_turbulence(
@@ -343,13 +396,30 @@ def wind_blended_turbulence(
 
     .. math:: H = w H_{0.5} + (1 - w) H_0,\quad w = e^{-v t / r_0}
     """
+    _positive("wavelength", wavelength)
+    _positive("aperture_diameter", aperture_diameter)
+    _positive("coherence_diameter", coherence_diameter)
     _nonnegative("integration_time", integration_time)
     _nonnegative("wind_speed", wind_speed)
-    weight = np.exp(-wind_speed * integration_time / coherence_diameter)
-    short = turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, 0.5)
-    long = turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, 0.0)
-    out = weight * short + (1.0 - weight) * long
+    out = _labelled(_wind_blended_xy_kernel, wind_speed, integration_time, coherence_diameter,
+                    wavelength, fx, fy, aperture_diameter)
     return described(out, wind_blended_turbulence)
+
+
+def _wind_blended_xy_kernel(wind_speed, integration_time, coherence_diameter, wavelength, fx, fy,
+                            aperture_diameter):
+    """:func:`_wind_blended_kernel` at hypot(fx, fy) (arguments in the order of the dims)."""
+    return _wind_blended_kernel(np.hypot(fx, fy), wavelength, aperture_diameter,
+                                coherence_diameter, integration_time, wind_speed)
+
+
+def _wind_blended_kernel(radial, wavelength, aperture_diameter, coherence_diameter,
+                         integration_time, wind_speed):
+    """IBSM Eq. 3-9 on plain arrays, at radial frequency ``radial`` >= 0 [cycles/rad]."""
+    weight = np.exp(-wind_speed * integration_time / coherence_diameter)
+    short = _turbulence_kernel(radial, wavelength, aperture_diameter, coherence_diameter, 0.5)
+    long = _turbulence_kernel(radial, wavelength, aperture_diameter, coherence_diameter, 0.0)
+    return weight * short + (1.0 - weight) * long
 
 
 def polychromatic_turbulence(
@@ -400,31 +470,35 @@ def polychromatic_turbulence(
     here that is :func:`slant_path_coherence_diameter` and the band r0 is
     :func:`band_coherence_diameter`.
     """
+    _positive("aperture_diameter", aperture_diameter)
+    _positive("coherence_diameter", coherence_diameter)
+    _positive("reference_wavelength", reference_wavelength)
     _nonnegative("integration_time", integration_time)
     _nonnegative("wind_speed", wind_speed)
-    weights = weights / weights.sum("wavelength")
-    out = xr.apply_ufunc(
-        _polychromatic_kernel, np.hypot(fx, fy), coherence_diameter, integration_time,
-        wind_speed, aperture_diameter, reference_wavelength, wavelength, weights,
-        input_core_dims=[[], [], [], [], [], [], ["wavelength"], ["wavelength"]],
-        dask="parallelized", output_dtypes=[float],
-        dask_gufunc_kwargs={"allow_rechunk": True},  # a binned band may come in pieces
-    )
+    out = _spectral(_polychromatic_xy_kernel, fx, fy, coherence_diameter, integration_time,
+                    wind_speed, aperture_diameter, reference_wavelength, wavelength, weights)
     return described(out, polychromatic_turbulence)
+
+
+def _polychromatic_xy_kernel(fx, fy, r0_ref, exposure, speed, diameter, reference, wl, w):
+    """:func:`_polychromatic_kernel` at hypot(fx, fy) (arguments in the order of the dims)."""
+    return _polychromatic_kernel(np.hypot(fx, fy), r0_ref, exposure, speed, diameter, reference,
+                                 wl, w)
 
 
 def _polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, wl, w):
     """Weighted sum over the last (wavelength) axis, one wavelength at a time (numpy).
 
-    Accumulating wavelength by wavelength keeps memory at one slice of the
-    (frequency x scenario) block instead of materialising the wavelength axis.
+    ``w`` is normalised here. Accumulating wavelength by wavelength keeps memory at
+    one slice of the (frequency x scenario) block instead of materialising the
+    wavelength axis.
     """
+    w = w / np.nansum(w, axis=-1, keepdims=True)
     shape = np.broadcast_shapes(*(np.shape(a) for a in (radial, r0_ref, exposure, speed,
                                                          diameter, reference)), np.shape(w)[:-1])
     total = np.zeros(shape)
     for i in range(np.shape(wl)[-1]):
         lam = wl[..., i]
-        r0 = scale_coherence_diameter(r0_ref, lam, reference)
-        total += w[..., i] * wind_blended_turbulence(radial, 0.0, lam, diameter, r0, exposure,
-                                                     speed)
+        r0 = _scale_kernel(r0_ref, lam, reference)
+        total += w[..., i] * _wind_blended_kernel(radial, lam, diameter, r0, exposure, speed)
     return total

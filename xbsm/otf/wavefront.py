@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._metadata import described
-from .spectral import _nonnegative, _positive, _require
+from .spectral import _labelled, _nonnegative, _positive, _require
 
 __all__ = ["random_phase_wavefront", "shannon_wavefront"]
 
@@ -57,14 +57,29 @@ def random_phase_wavefront(
     _positive("correlation_length_x", correlation_length_x)
     _positive("correlation_length_y", correlation_length_y)
     _positive("phase_variance_wavelength", phase_variance_wavelength)
-    variance = phase_variance
-    if phase_variance_wavelength is not None:
-        variance = phase_variance * (phase_variance_wavelength / wavelength) ** 2
+    # the variance at its own wavelength: (lambda / lambda)^2 = 1 exactly
+    reference = wavelength if phase_variance_wavelength is None else phase_variance_wavelength
+    out = _labelled(_random_phase_kernel, phase_variance, reference, wavelength, fx,
+                    correlation_length_x, fy, correlation_length_y)
+    return described(out, random_phase_wavefront)
+
+
+def _random_phase_kernel(phase_variance, phase_variance_wavelength, wavelength, fx,
+                         correlation_length_x, fy, correlation_length_y):
+    """IBSM Eq. 3-31 on plain arrays (arguments in the order of the result's dims)."""
+    variance = phase_variance * (phase_variance_wavelength / wavelength) ** 2
     correlation = np.exp(
         -(wavelength**2) * ((fx / correlation_length_x) ** 2 + (fy / correlation_length_y) ** 2)
     )
-    out = np.exp(-variance * (1.0 - correlation))
-    return described(out, random_phase_wavefront)
+    return np.exp(-variance * (1.0 - correlation))
+
+
+def _shannon_kernel(rms_wavefront_error, fx, fy, wavelength, aperture_diameter, clip):
+    """Shannon's quadratic MTF loss on plain arrays."""
+    nu = np.hypot(fx, fy) * wavelength / aperture_diameter
+    if clip:
+        nu = np.minimum(nu, 1.0)
+    return 1.0 - (rms_wavefront_error / 0.18) ** 2 * (1.0 - 4.0 * (nu - 0.5) ** 2)
 
 
 def shannon_wavefront(fx, fy, wavelength, aperture_diameter, rms_wavefront_error, clip=True):
@@ -104,8 +119,6 @@ def shannon_wavefront(fx, fy, wavelength, aperture_diameter, rms_wavefront_error
     _require(
         "rms_wavefront_error", rms_wavefront_error, lambda a: (a >= 0) & (a <= 0.18), "in [0, 0.18]"
     )
-    nu = np.hypot(fx, fy) * wavelength / aperture_diameter
-    if clip:
-        nu = np.minimum(nu, 1.0)
-    out = 1.0 - (rms_wavefront_error / 0.18) ** 2 * (1.0 - 4.0 * (nu - 0.5) ** 2)
+    out = _labelled(_shannon_kernel, rms_wavefront_error, fx, fy, wavelength, aperture_diameter,
+                    clip=bool(clip))
     return described(out, shannon_wavefront)
