@@ -152,18 +152,21 @@ def uniform_trapezoid_rule(count: int, step: float, offset: float = 1e-6):
         raise ValueError(f"count must be >= 2, got {count}")
     if not step > 0:
         raise ValueError(f"step must be > 0 [cycles/rad], got {step}")
+    return _pack(
+        *_uniform_trapezoid_kernel(count, step, offset),
+        {"quadrature_rule": "uniform_trapezoid", "frequency_offset": float(offset)},
+    )
+
+
+def _uniform_trapezoid_kernel(count, step, offset):
+    """Nodes, weights and sine abscissae of :func:`uniform_trapezoid_rule` (numpy)."""
     nodes = step * np.arange(1.0 * count)
     w = nodes + offset
     d = np.diff(w)
     weights = np.zeros(count)
     weights[:-1] += d / 2.0
     weights[1:] += d / 2.0
-    return _pack(
-        nodes,
-        weights,
-        w,
-        {"quadrature_rule": "uniform_trapezoid", "frequency_offset": float(offset)},
-    )
+    return nodes, weights, w
 
 
 def gauss_legendre_rule(edges, nodes_per_panel: int):
@@ -193,16 +196,20 @@ def gauss_legendre_rule(edges, nodes_per_panel: int):
     edges = np.asarray(edges, dtype=float)
     if edges.ndim != 1 or edges.size < 2 or np.any(np.diff(edges) <= 0):
         raise ValueError("edges must be a 1-D strictly increasing array of >= 2 values")
-    t, v = np.polynomial.legendre.leggauss(int(nodes_per_panel))
-    a, b = edges[:-1, None], edges[1:, None]
-    nodes = ((a + b) / 2 + (b - a) / 2 * t).ravel()
-    weights = ((b - a) / 2 * v).ravel()
+    nodes, weights = _gauss_legendre_kernel(edges, nodes_per_panel)
     return _pack(
         nodes,
         weights,
         nodes,
         {"quadrature_rule": "gauss_legendre", "nodes_per_panel": int(nodes_per_panel)},
     )
+
+
+def _gauss_legendre_kernel(edges, nodes_per_panel):
+    """Nodes and weights of :func:`gauss_legendre_rule` (numpy)."""
+    t, v = np.polynomial.legendre.leggauss(int(nodes_per_panel))
+    a, b = edges[:-1, None], edges[1:, None]
+    return ((a + b) / 2 + (b - a) / 2 * t).ravel(), ((b - a) / 2 * v).ravel()
 
 
 def detector_breakpoints(detector_ifov, cutoff):
@@ -318,45 +325,68 @@ def edge_quadrature(*, cutoff, ifov, rule, grid_size, nodes_per_panel, panels_pe
     The knobs of a method preset: ``edge_quadrature(cutoff=..., ifov=...,
     **xbsm.method("accurate").edge_quadrature_knobs())``.
     """
+    cutoff, ifov_max = _checked(rule, cutoff, np.nanmax(np.asarray(ifov, dtype=float)))
+    nodes, weights, sine = _edge_rule(
+        cutoff, ifov_max, rule, grid_size=grid_size, nodes_per_panel=nodes_per_panel,
+        panels_per_oscillation=panels_per_oscillation, min_panels=min_panels,
+        breakpoints=breakpoints, frequency_offset=frequency_offset, max_nodes=max_nodes)
+    if rule == "uniform_trapezoid":
+        rule_attrs = {"quadrature_rule": rule, "frequency_offset": float(frequency_offset)}
+    else:
+        rule_attrs = {"quadrature_rule": rule, "nodes_per_panel": int(nodes_per_panel)}
+    meta = {"quadrature_preset": name, "cutoff_frequency": cutoff}
+    return _pack(nodes, weights, sine, {**rule_attrs, **meta})
+
+
+def _checked(rule, cutoff, ifov_max):
+    """The rule's name, cutoff and largest IFOV checked; the last two as floats."""
     if rule not in EDGE_RULES:
         raise ValueError(f"rule must be one of {', '.join(map(repr, EDGE_RULES))}; got {rule!r}")
-    cutoff = float(cutoff)
+    cutoff, ifov_max = float(cutoff), float(ifov_max)
     if not (np.isfinite(cutoff) and cutoff > 0):
         raise ValueError(f"cutoff must be finite and > 0 [cycles/rad], got {cutoff}")
-    ifov_max = float(np.nanmax(np.asarray(ifov, dtype=float)))
     if not (np.isfinite(ifov_max) and ifov_max > 0):
-        raise ValueError(f"ifov must be finite and > 0 [rad], got {ifov}")
+        raise ValueError(f"ifov must be finite and > 0 [rad], got {ifov_max}")
+    return cutoff, ifov_max
 
+
+def _edge_rule(cutoff, ifov_max, rule, *, grid_size, nodes_per_panel, panels_per_oscillation,
+               min_panels, breakpoints=None, frequency_offset=1e-6, max_nodes=None):
+    """Nodes, weights and sine abscissae of :func:`edge_quadrature` (numpy, plain floats).
+
+    Raises the ``max_nodes`` error, which depends on the sensor (not a programming error).
+    """
     if rule == "uniform_trapezoid":
         grid = np.linspace(-1.0, 1.0, grid_size) * cutoff
-        step = grid[1] - grid[0]
-        nodes, weights = uniform_trapezoid_rule(
-            pybsm_slice_count(grid_size), step, frequency_offset
-        )
-    else:
-        n_osc = cutoff * ifov_max * MAX_POSITION
-        n_panels = max(min_panels, math.ceil(panels_per_oscillation * n_osc))
-        if max_nodes is not None and n_panels * nodes_per_panel > max_nodes:
-            q = 1.0 / (cutoff * ifov_max)
-            raise ValueError(
-                f"the edge-response quadrature would need {n_panels * nodes_per_panel} "
-                f"frequency nodes (limit max_frequency_nodes={max_nodes}): the detector samples "
-                f"the optics far too coarsely (Q = lambda_min F / p = {q:.3g}); check "
-                "pixel_pitch_x, pixel_pitch_y, focal_length and aperture_diameter, or raise the "
-                "limit with xbsm.method(..., max_frequency_nodes=...)")
-        nodes, weights = gauss_legendre_rule(
-            _panel_edges(cutoff, n_panels, breakpoints), nodes_per_panel
-        )
-    meta = {"quadrature_preset": name, "cutoff_frequency": cutoff}
-    nodes.attrs.update(meta)
-    weights.attrs.update(meta)
-    return nodes, weights
+        return _uniform_trapezoid_kernel(pybsm_slice_count(grid_size), grid[1] - grid[0],
+                                         frequency_offset)
+    n_osc = cutoff * ifov_max * MAX_POSITION
+    n_panels = max(min_panels, math.ceil(panels_per_oscillation * n_osc))
+    if max_nodes is not None and n_panels * nodes_per_panel > max_nodes:
+        q = 1.0 / (cutoff * ifov_max)
+        raise ValueError(
+            f"the edge-response quadrature would need {n_panels * nodes_per_panel} "
+            f"frequency nodes (limit max_frequency_nodes={max_nodes}): the detector samples "
+            f"the optics far too coarsely (Q = lambda_min F / p = {q:.3g}); check "
+            "pixel_pitch_x, pixel_pitch_y, focal_length and aperture_diameter, or raise the "
+            "limit with xbsm.method(..., max_frequency_nodes=...)")
+    nodes, weights = _gauss_legendre_kernel(
+        _panel_edges(cutoff, n_panels, breakpoints), nodes_per_panel)
+    return nodes, weights, nodes
 
 
 def _sensor_grid(*arrays):
-    """Broadcast sensor quantities to numpy, keeping their dims and coords."""
-    b = xr.broadcast(*[xr.DataArray(a) for a in arrays])
-    return b, b[0].dims, {d: b[0][d] for d in b[0].dims if d in b[0].coords}
+    """Sensor quantities as numpy arrays on their joint dims, with those dims' coordinates."""
+    arrays = [a if isinstance(a, xr.DataArray) else xr.DataArray(a) for a in arrays]
+    sizes = {}
+    for a in arrays:
+        sizes.update(a.sizes)
+    dims = tuple(sizes)
+    values = [a.variable.set_dims(sizes).transpose(*dims).values for a in arrays]
+    coords = {}
+    for a in arrays:
+        coords.update({d: a.coords[d] for d in a.dims if d in a.coords and d not in coords})
+    return values, dims, coords
 
 
 def edge_nodes(cutoff, ifov_x, ifov_y, **knobs):
@@ -380,27 +410,24 @@ def edge_nodes(cutoff, ifov_x, ifov_y, **knobs):
         need fewer nodes than the largest are padded with zero weights.
         [cycles/rad]
     """
+    knobs = {k: v for k, v in knobs.items() if k != "name"}
+    rule = knobs.pop("rule")
     (c, ix, iy), dims, coords = _sensor_grid(cutoff, ifov_x, ifov_y)
+    ifov = np.maximum(ix, iy)
     per_sensor = {}
     for index in np.ndindex(c.shape):
-        key = (float(c.values[index]), float(max(ix.values[index], iy.values[index])))
+        key = (float(c[index]), float(ifov[index]))
         if key not in per_sensor:
-            nodes, weights = edge_quadrature(cutoff=key[0], ifov=key[1], **knobs)
-            per_sensor[key] = (nodes.values, weights.values, weights["sine_frequency"].values)
+            per_sensor[key] = _edge_rule(*_checked(rule, *key), rule, **knobs)
     size = max(v[0].size for v in per_sensor.values())
-    shape = (size,) + c.shape
-    nodes = np.empty(shape)
-    weights = np.zeros(shape)
-    sine = np.empty(shape)
+    nodes, weights, sine = (np.empty((size,) + c.shape), np.zeros((size,) + c.shape),
+                            np.empty((size,) + c.shape))
     for index in np.ndindex(c.shape):
-        key = (float(c.values[index]), float(max(ix.values[index], iy.values[index])))
+        key = (float(c[index]), float(ifov[index]))
         n, w, s = per_sensor[key]
-        pad = (slice(None),) + index
-        nodes[pad] = key[0]
-        sine[pad] = key[0]
-        nodes[(slice(0, n.size),) + index] = n
-        weights[(slice(0, n.size),) + index] = w
-        sine[(slice(0, n.size),) + index] = s
+        nodes[(slice(None),) + index] = sine[(slice(None),) + index] = key[0]  # padding
+        head = (slice(0, n.size),) + index
+        nodes[head], weights[head], sine[head] = n, w, s
     all_dims = ("frequency",) + tuple(dims)
     attrs = {"units": "cycles/rad"}
     nodes_da = xr.DataArray(nodes, dims=all_dims, coords=coords,
@@ -450,11 +477,43 @@ def cutoff_wavelength(wavelength: xr.DataArray, qe, transmission):
     xr.DataArray
         The wavelength setting the optics cutoff D / lambda. [m]
     """
-    contributes = (xr.DataArray(qe) * xr.DataArray(transmission)) > 0
-    contributes = contributes.broadcast_like(wavelength)
-    out = wavelength.where(contributes).min("wavelength")
+    out = _over_band(_shortest_contributing_kernel, wavelength, qe, transmission)
     return named(out, "m", "shortest contributing wavelength",
                  standard_name="radiation_wavelength")
+
+
+def _shortest_contributing_kernel(wavelength, qe, transmission):
+    """Smallest ``wavelength`` (last axis) where ``qe * transmission > 0``; NaN if none."""
+    contributes = np.broadcast_to(qe * transmission > 0,
+                                  np.broadcast_shapes(np.shape(qe * transmission),
+                                                      np.shape(wavelength)))
+    return np.fmin.reduce(np.where(contributes, wavelength, np.nan), axis=-1)
+
+
+def _cutoff_kernel(aperture_diameter, wavelength, qe, transmission):
+    return aperture_diameter / _shortest_contributing_kernel(wavelength, qe, transmission)
+
+
+def _over_band(kernel, wavelength, *args, leading=()):
+    """``kernel(*leading, wavelength, *args)`` with ``wavelength`` as the arguments' last axis.
+
+    Arguments without a ``wavelength`` dimension reach the kernel with a length-1 last
+    axis; dims keep the order of arithmetic on the arguments in that order.
+    """
+    cores = [isinstance(a, xr.DataArray) and "wavelength" in a.dims for a in args]
+    n = len(leading)
+
+    def on_band(*arrays):
+        front, band, rest = arrays[:n], arrays[n], arrays[n + 1:]
+        return kernel(*front, band, *(a if core else np.asarray(a)[..., np.newaxis]
+                                      for a, core in zip(rest, cores, strict=True)))
+
+    return xr.apply_ufunc(
+        on_band, *leading, wavelength, *args,
+        input_core_dims=[[]] * len(leading) + [["wavelength"]]
+        + [["wavelength"] if core else [] for core in cores],
+        dask="parallelized", output_dtypes=[float],
+        dask_gufunc_kwargs={"allow_rechunk": True})
 
 
 def optics_cutoff(aperture_diameter, wavelength: xr.DataArray, qe, transmission):
@@ -475,7 +534,8 @@ def optics_cutoff(aperture_diameter, wavelength: xr.DataArray, qe, transmission)
         Upper limit of every frequency integral: the system OTF vanishes beyond it.
         [cycles/rad]
     """
-    out = aperture_diameter / cutoff_wavelength(wavelength, qe, transmission)
+    out = _over_band(_cutoff_kernel, wavelength, qe, transmission,
+                     leading=(aperture_diameter,))
     return named(out, "cycles/rad", "optics cutoff frequency D/lambda_min")
 
 
