@@ -394,9 +394,10 @@ def test_eho_rule_monotonic_uses_er_at_1p25_else_max():
     x = x.assign_coords(position=metrics.EHO_POSITIONS)
     rising = 1 - 0.5 * np.exp(-x)
     overshoot = rising + 0.1 * np.exp(-((x - 1.5) ** 2) * 4)
-    eho = metrics.edge._eho_from_er(xr.concat([rising, overshoot], dim="case"))
-    assert float(eho[0]) == pytest.approx(float(rising.sel(position=1.25)))
-    assert float(eho[1]) == pytest.approx(float(overshoot.max()))
+    # the NumPy kernel: edge responses at EHO_POSITIONS along the last axis
+    eho = metrics.edge._eho_kernel(np.stack([rising.values, overshoot.values]))
+    assert eho[0] == pytest.approx(float(rising.sel(position=1.25)))
+    assert eho[1] == pytest.approx(float(overshoot.max()))
 
 
 # ------------------------------------------------ ground resolved distance
