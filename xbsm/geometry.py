@@ -25,44 +25,50 @@ def _check_form(form):
 # ---------------------------------------------------------------------------- kernels
 # Plain NumPy in and out, no checks. Each formula takes its arguments in the order in which
 # its arithmetic first meets their dimensions, so that ``xr.apply_ufunc`` labels the result
-# with the dimension order the formula has always given.
+# with the dimension order the formula has always given. Like xarray's arithmetic, the
+# kernels give IEEE results (inf, NaN) without floating-point warnings.
 
 
 def _slant_range_stable(sensor_altitude, target_altitude, ground_range):
-    a = EARTH_RADIUS + sensor_altitude
-    c = EARTH_RADIUS + target_altitude
-    half = np.sin(ground_range / (2.0 * EARTH_RADIUS))
-    return np.sqrt((a - c) ** 2 + 4.0 * a * c * half**2)
+    with np.errstate(all="ignore"):
+        a = EARTH_RADIUS + sensor_altitude
+        c = EARTH_RADIUS + target_altitude
+        half = np.sin(ground_range / (2.0 * EARTH_RADIUS))
+        return np.sqrt((a - c) ** 2 + 4.0 * a * c * half**2)
 
 
 def _slant_range_cosines(target_altitude, sensor_altitude, ground_range):
-    a = EARTH_RADIUS + sensor_altitude
-    c = EARTH_RADIUS + target_altitude
-    return np.sqrt(c**2.0 + a**2.0 - 2.0 * a * c * np.cos(ground_range / EARTH_RADIUS))
+    with np.errstate(all="ignore"):
+        a = EARTH_RADIUS + sensor_altitude
+        c = EARTH_RADIUS + target_altitude
+        return np.sqrt(c**2.0 + a**2.0 - 2.0 * a * c * np.cos(ground_range / EARTH_RADIUS))
 
 
 def _nadir_angle_stable(target_altitude, slant_range, sensor_altitude):
-    a = EARTH_RADIUS + sensor_altitude
-    c = EARTH_RADIUS + target_altitude
-    sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
-    return np.arctan2(c * sine, (a - c) + c * two_half_sq)
+    with np.errstate(all="ignore"):
+        a = EARTH_RADIUS + sensor_altitude
+        c = EARTH_RADIUS + target_altitude
+        sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
+        return np.arctan2(c * sine, (a - c) + c * two_half_sq)
 
 
 def _nadir_angle_cosines(target_altitude, sensor_altitude, slant_range):
-    a = EARTH_RADIUS + sensor_altitude
-    c = EARTH_RADIUS + target_altitude
-    cosine = -(c**2.0 - a**2.0 - slant_range**2.0) / (2.0 * a * slant_range)
-    return np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0))
+    with np.errstate(all="ignore"):
+        a = EARTH_RADIUS + sensor_altitude
+        c = EARTH_RADIUS + target_altitude
+        cosine = -(c**2.0 - a**2.0 - slant_range**2.0) / (2.0 * a * slant_range)
+        return np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0))
 
 
 def _target_elevation_kernel(sensor_altitude, target_altitude, slant_range, form):
-    a = EARTH_RADIUS + sensor_altitude
-    c = EARTH_RADIUS + target_altitude
-    if form == "law-of-cosines":
-        cosine = (a**2.0 - c**2.0 - slant_range**2.0) / (2.0 * c * slant_range)
-        return np.arcsin(np.minimum(np.maximum(cosine, -1.0), 1.0))
-    sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
-    return np.arctan2((a - c) - a * two_half_sq, a * sine)
+    with np.errstate(all="ignore"):
+        a = EARTH_RADIUS + sensor_altitude
+        c = EARTH_RADIUS + target_altitude
+        if form == "law-of-cosines":
+            cosine = (a**2.0 - c**2.0 - slant_range**2.0) / (2.0 * c * slant_range)
+            return np.arcsin(np.minimum(np.maximum(cosine, -1.0), 1.0))
+        sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
+        return np.arctan2((a - c) - a * two_half_sq, a * sine)
 
 
 def _nadir_angle_kernel(slant_range, sensor_altitude, target_altitude, form):
@@ -86,18 +92,21 @@ def _slant_and_elevation_kernel(altitude, ground_range, form, elevation):
 
 def _altitude_along_path_kernel(sensor_altitude, slant_range, distance_from_target,
                                 target_altitude, form):
-    a = EARTH_RADIUS + sensor_altitude
-    phi = _nadir_angle_kernel(slant_range, sensor_altitude, target_altitude, form)
-    b = slant_range - distance_from_target
-    return np.sqrt(a**2 + b**2 - 2.0 * a * b * np.cos(phi)) - EARTH_RADIUS
+    with np.errstate(all="ignore"):
+        a = EARTH_RADIUS + sensor_altitude
+        phi = _nadir_angle_kernel(slant_range, sensor_altitude, target_altitude, form)
+        b = slant_range - distance_from_target
+        return np.sqrt(a**2 + b**2 - 2.0 * a * b * np.cos(phi)) - EARTH_RADIUS
 
 
 def _ratio_kernel(numerator, denominator):
-    return numerator / denominator
+    with np.errstate(all="ignore"):
+        return numerator / denominator
 
 
 def _product_kernel(a, b):
-    return a * b
+    with np.errstate(all="ignore"):
+        return a * b
 
 
 def _apply(kernel, *args, n_out=1, **knobs):

@@ -8,23 +8,33 @@ import xarray as xr
 from ._metadata import named
 
 # NumPy kernels (plain arrays in and out, no checks); the public functions below wrap them
-# in one ``xr.apply_ufunc`` each, which broadcasts, aligns and carries dask.
+# in one ``xr.apply_ufunc`` each, which broadcasts, aligns and carries dask. Like xarray's
+# arithmetic, they give IEEE results (inf, NaN) without floating-point warnings.
 
 
 def _quantization_noise_kernel(well_range, bit_depth):
-    return well_range / (np.sqrt(12) * (2.0**bit_depth - 1.0))
+    with np.errstate(all="ignore"):
+        return well_range / (np.sqrt(12) * (2.0**bit_depth - 1.0))
+
+
+def _shot_noise_kernel(photoelectrons):
+    with np.errstate(all="ignore"):
+        return np.sqrt(photoelectrons)
 
 
 def _dark_current_noise_kernel(tdi_stages, dark_current, integration_time):
-    return np.sqrt(tdi_stages * dark_current * integration_time)
+    with np.errstate(all="ignore"):
+        return np.sqrt(tdi_stages * dark_current * integration_time)
 
 
 def _total_noise_kernel(shot_variance, quantization, read, other):
-    return np.sqrt(shot_variance + quantization**2 + read**2 + other**2)
+    with np.errstate(all="ignore"):
+        return np.sqrt(shot_variance + quantization**2 + read**2 + other**2)
 
 
 def _stacked_snr_kernel(frame_stacks, snr):
-    return np.sqrt(frame_stacks) * snr
+    with np.errstate(all="ignore"):
+        return np.sqrt(frame_stacks) * snr
 
 
 def _chain_total_kernel(target, background, well_range, bit_depth, read, other):
@@ -34,7 +44,9 @@ def _chain_total_kernel(target, background, well_range, bit_depth, read, other):
 
 
 def _snr_frame_kernel(contrast, target, background, well_range, bit_depth, read, other):
-    return contrast / _chain_total_kernel(target, background, well_range, bit_depth, read, other)
+    total = _chain_total_kernel(target, background, well_range, bit_depth, read, other)
+    with np.errstate(all="ignore"):
+        return contrast / total
 
 
 def _snr_kernel(frame_stacks, contrast, target, background, well_range, bit_depth, read, other):
@@ -43,20 +55,21 @@ def _snr_kernel(frame_stacks, contrast, target, background, well_range, bit_dept
 
 
 def _shot_noise_of_brighter_kernel(target, background):
-    return np.sqrt(np.maximum(target, background))
+    return _shot_noise_kernel(np.maximum(target, background))
 
 
 def _rate_noise_kernel(rate, integration_time, tdi_stages):
     """Shot noise of a photoelectron rate over every TDI stage [rms electrons]."""
-    return np.sqrt(rate * (integration_time * tdi_stages))
+    with np.errstate(all="ignore"):
+        return np.sqrt(rate * (integration_time * tdi_stages))
 
 
 def _scene_noise_kernel(target_rate, integration_time, tdi_stages, background_rate, path_rate):
     """Scene noise of the brighter of target and background, less the path term."""
-    exposure = integration_time * tdi_stages
-    scene_and_path = np.maximum(np.sqrt(target_rate * exposure),
-                                np.sqrt(background_rate * exposure))
-    with np.errstate(invalid="ignore"):
+    with np.errstate(all="ignore"):
+        exposure = integration_time * tdi_stages
+        scene_and_path = np.maximum(np.sqrt(target_rate * exposure),
+                                    np.sqrt(background_rate * exposure))
         return np.sqrt(scene_and_path**2 - np.sqrt(path_rate * exposure) ** 2)
 
 
@@ -78,7 +91,7 @@ def shot_noise(photoelectrons):
     float or xr.DataArray
         [rms electrons]
     """
-    return named(_apply(np.sqrt, photoelectrons), "count", "shot noise")
+    return named(_apply(_shot_noise_kernel, photoelectrons), "count", "shot noise")
 
 
 def dark_current_noise(dark_current, integration_time, tdi_stages=1.0):

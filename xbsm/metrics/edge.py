@@ -79,14 +79,16 @@ def _edge_response_kernel(otf, weights, abscissa, ifov, position):
     has the shape of the broadcast of weights, abscissa, ifov and position only: computed
     once, then contracted with the OTF, whatever the OTF's other axes.
     """
-    phase = 2.0 * np.pi * abscissa * np.asarray(ifov)[..., None] * np.asarray(position)[..., None]
-    sine = weights * np.sin(phase) / abscissa
-    if np.iscomplexobj(otf):
-        cosine = weights * np.cos(phase) / abscissa
-        integral = _sum_of_products(otf.real, sine) + _sum_of_products(otf.imag, cosine)
-    else:
-        integral = _sum_of_products(otf, sine)
-    return 0.5 + integral / np.pi
+    with np.errstate(all="ignore"):  # IEEE results without warnings, as xarray's arithmetic
+        phase = (2.0 * np.pi * abscissa * np.asarray(ifov)[..., None]
+                 * np.asarray(position)[..., None])
+        sine = weights * np.sin(phase) / abscissa
+        if np.iscomplexobj(otf):
+            cosine = weights * np.cos(phase) / abscissa
+            integral = _sum_of_products(otf.real, sine) + _sum_of_products(otf.imag, cosine)
+        else:
+            integral = _sum_of_products(otf, sine)
+        return 0.5 + integral / np.pi
 
 
 def _sum_of_products(a, b):

@@ -264,27 +264,31 @@ def _check_calibration(calibration):
 # ---------------------------------------------------------------------------- kernels
 # Plain NumPy in and out, no checks, no xarray: the arithmetic of every GIQE function runs
 # here once per call, over arrays that ``xr.apply_ufunc`` has aligned and broadcast; the
-# public functions below only label the results (and carry dask).
+# public functions below only label the results (and carry dask). Like xarray's arithmetic,
+# the kernels give IEEE results (inf, NaN) without floating-point warnings; NaN marks what
+# the flags report.
 
 
 def _sampling_q_kernel(wavelength, aperture_diameter, ifov):
-    return wavelength / (aperture_diameter * ifov)
+    with np.errstate(all="ignore"):
+        return wavelength / (aperture_diameter * ifov)
 
 
 def _geometric_mean_kernel(a, b):
-    return np.sqrt(a * b)
+    with np.errstate(all="ignore"):
+        return np.sqrt(a * b)
 
 
 def _ground_plane_kernel(gsd, elevation, power):
     """GSD / sin(elevation)^power; NaN where sin(elevation) <= 0."""
     sin_el = np.sin(elevation)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(all="ignore"):
         out = gsd / (sin_el**power)
     return np.where(sin_el > 0, out, np.nan)
 
 
 def _giqe3_kernel(rer, gsd, eho, noise_gain, snr):
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(all="ignore"):
         # log10(RER) - log10(GSD) rather than log10(RER / GSD): no underflow for tiny RER
         niirs = (
             11.81 + 3.32 * (np.log10(rer) - np.log10(gsd / INCH)) - 1.48 * eho - noise_gain / snr
@@ -297,7 +301,7 @@ def _giqe4_kernel(rer, gsd, elevation, eho, noise_gain, snr, noise_coefficient):
     gsd_gp = _ground_plane_kernel(gsd, elevation, 0.5)
     c1 = np.where(rer >= 0.9, 3.32, 3.16)
     c2 = np.where(rer >= 0.9, 1.559, 2.817)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(all="ignore"):
         niirs = (
             10.251
             - c1 * np.log10(gsd_gp / INCH)
@@ -311,7 +315,7 @@ def _giqe4_kernel(rer, gsd, elevation, eho, noise_gain, snr, noise_coefficient):
 
 def _giqe5_rer_kernel(rer_x, rer_y):
     hi, lo = np.maximum(rer_x, rer_y), np.minimum(rer_x, rer_y)
-    with np.errstate(invalid="ignore"):
+    with np.errstate(all="ignore"):
         return (hi * lo**2.0) ** (1.0 / 3.0)
 
 
@@ -319,7 +323,7 @@ def _giqe5_kernel(gsd, elevation, snr, rer_x, rer_y):
     rer = _giqe5_rer_kernel(rer_x, rer_y)
     sin_el = np.sin(elevation)
     gsd_w = _ground_plane_kernel(gsd, elevation, 0.25)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+    with np.errstate(all="ignore"):
         log_rer = np.log10(rer)
         niirs = (
             9.57
