@@ -1,3 +1,5 @@
+import dask
+import dask.array as da
 import numpy as np
 import pytest
 import xarray as xr
@@ -98,3 +100,36 @@ def test_target_elevation_is_look_down_minus_central_angle():
     r = geometry.slant_range(g, h)
     expected = geometry.elevation_angle(r, h) - g / EARTH_RADIUS
     assert geometry.target_elevation_angle(r, h) == pytest.approx(expected, rel=1e-9)
+
+
+def test_slant_and_elevation_kernel_on_plain_arrays():
+    # pybsm_test_cases.md A5, 9 km altitude, 20 km ground range: 50-digit mpmath gives
+    # 21944.568747966005 m and a look-down angle of 0.42415759925679397 rad; pyBSM's law of
+    # cosines 21944.568747898647 m and 0.42415759925816854 rad
+    h, g = np.array([9000.0]), np.array([20000.0, 0.1])
+    slant, angle = geometry._slant_and_elevation_kernel(h, g, "stable", "look-down")
+    assert slant[0] == pytest.approx(21944.568747966005, rel=1e-15)
+    assert angle[0] == pytest.approx(0.42415759925679397, rel=1e-14)
+    slant, angle = geometry._slant_and_elevation_kernel(h, g, "law-of-cosines", "look-down")
+    assert slant[0] == pytest.approx(21944.568747898647, rel=1e-11)
+    assert angle[0] == pytest.approx(0.42415759925816854, rel=1e-9)
+    # at the target the elevation is the look-down angle less the central angle g / R_e
+    _, target = geometry._slant_and_elevation_kernel(h, g, "stable", "target")
+    np.testing.assert_allclose(target[0], 0.42415759925679397 - 20000.0 / EARTH_RADIUS,
+                               rtol=1e-13)
+
+
+def test_viewing_geometry_keeps_each_output_on_its_dims_and_dask_lazy(no_compute):
+    gr = xr.DataArray([1e4, 2e4, 4e4, 8e4], dims="ground_range")
+    f = xr.DataArray([3.0, 4.0], dims="focal_length")
+    eager = geometry.viewing_geometry(gr, 9e3, 8e-6, 1e-5, f)
+    assert eager.slant_range.dims == eager.elevation_angle.dims == ("ground_range",)
+    assert eager.ifov_x.dims == ("focal_length",)
+    assert set(eager.gsd_y.dims) == {"ground_range", "focal_length"}
+    # GSD = IFOV x slant range (IBSM Eq. 3-62), IFOV = pitch / focal length
+    np.testing.assert_allclose(eager.gsd_y.isel(focal_length=1), 1e-5 / 4.0 * eager.slant_range,
+                               rtol=1e-15)
+    lazy = geometry.viewing_geometry(gr.chunk(2), 9e3, 8e-6, 1e-5, f)
+    assert all(isinstance(lazy[n].data, da.Array) for n in ("slant_range", "gsd_x"))
+    with dask.config.set(scheduler="sync"):
+        xr.testing.assert_identical(lazy.compute(), eager)

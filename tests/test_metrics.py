@@ -394,9 +394,10 @@ def test_eho_rule_monotonic_uses_er_at_1p25_else_max():
     x = x.assign_coords(position=metrics.EHO_POSITIONS)
     rising = 1 - 0.5 * np.exp(-x)
     overshoot = rising + 0.1 * np.exp(-((x - 1.5) ** 2) * 4)
-    eho = metrics.edge._eho_from_er(xr.concat([rising, overshoot], dim="case"))
-    assert float(eho[0]) == pytest.approx(float(rising.sel(position=1.25)))
-    assert float(eho[1]) == pytest.approx(float(overshoot.max()))
+    # the NumPy kernel: edge responses at EHO_POSITIONS along the last axis
+    eho = metrics.edge._eho_kernel(np.stack([rising.values, overshoot.values]))
+    assert eho[0] == pytest.approx(float(rising.sel(position=1.25)))
+    assert eho[1] == pytest.approx(float(overshoot.max()))
 
 
 # ------------------------------------------------ ground resolved distance
@@ -700,3 +701,106 @@ def test_every_flag_is_in_exactly_one_group():
     fl = xr.DataArray(np.int32([0, 4, 8, 512, 8 | 512]))
     assert flags.is_invalid(fl).values.tolist() == [False, False, False, True, True]
     assert flags.is_outside_calibration(fl).values.tolist() == [False, False, True, False, True]
+
+
+# ------------------------------------------------ NumPy kernels (plain arrays, no xarray)
+
+
+def test_giqe_kernels_on_plain_arrays():
+    from xbsm.metrics import giqe as g
+
+    # pybsm_test_cases.md B9: giqe3(rer=1, gsd=1, eho=1, ng=2, snr=2) and (2, 2, 2, 1, 1);
+    # arguments in the kernel's order (rer, gsd, eho, noise_gain, snr), GSD in m
+    one_two = np.array([1.0, 2.0])
+    niirs3 = g._giqe3_kernel(one_two, one_two, one_two, one_two[::-1], one_two[::-1])
+    np.testing.assert_allclose(niirs3, [4.034047939178196, 2.5540479391781954], rtol=1e-13)
+    # B10 with pyBSM's 0.334: rer = gsd = eho = 2, ng 1, SNR 1, nadir; B8: GIQE 5 of
+    # rer 1 x 1, gsd 1, SNR 2, elevation 20 rad
+    niirs4 = g._giqe4_kernel(2.0, 2.0, np.pi / 2, 2.0, 1.0, 1.0, 0.334)
+    niirs5 = g._giqe5_kernel(1.0, 20.0, 2.0, 1.0, 1.0)
+    assert niirs4 == pytest.approx(2.778934116813923, rel=1e-13)
+    assert niirs5 == pytest.approx(3.341217068150002, rel=1e-13)
+
+
+def test_giqe_by_version_kernel_broadcasts_size_one_axes_like_apply_ufunc():
+    from xbsm.metrics import giqe as g
+
+    # apply_ufunc hands kernels arrays with size-1 axes for missing dims: rer on a first
+    # axis, snr on a second; the result spans both with the versions on a last axis
+    rer, snr = np.array([[0.3], [0.6]]), np.array([5.0, 20.0, 50.0])
+    out = g._niirs_by_version_kernel(rer, 0.3, 0.3, 1.0, 1.0, snr, 1.0, rer, rer,
+                                     noise_coefficient=0.344)
+    assert out.shape == (2, 3, 3)
+    # each column is that version's own kernel (definition)
+    np.testing.assert_array_equal(out[..., 0], g._giqe3_kernel(rer, 0.3, 1.0, 1.0, snr))
+    np.testing.assert_array_equal(
+        out[..., 1], g._giqe4_kernel(rer, 0.3, 1.0, 1.0, 1.0, snr, 0.344))
+    np.testing.assert_array_equal(out[..., 2], g._giqe5_kernel(0.3, 1.0, snr, rer, rer))
+
+
+def test_flags_kernel_bits_and_nan_rules():
+    from xbsm.metrics import giqe as g
+
+    snr = np.array([-1.0, 10.0, 50.0, np.nan])
+    tests = ((0, flags.flag("snr_nonpositive"), "nonpositive", 0.0, 0.0, 0, None),
+             (0, flags.flag("snr_out_of_range"), "outside", 4.1, 26.7, 0, None))
+    bits = g._flags_kernel(snr, tests=tests, versions=None)
+    # xbsm.flags: snr_nonpositive = 512, snr_out_of_range = 8; NaN is out of range but not
+    # "nonpositive" (giqe_flags' rule)
+    assert bits.dtype == np.int32
+    assert bits.tolist() == [512 | 8, 0, 8, 8]
+    # two versions along a last axis; q's test is "any orientation" over its last axis
+    q = np.array([[1.5, 2.5], [1.5, 1.8]])
+    tests = ((1, flags.flag("q_out_of_range"), "any_outside", 1.0, 2.0, 0, None),)
+    assert g._flags_kernel(q, tests=tests, versions=2).tolist() == [[0, 1024], [0, 0]]
+
+
+def _giqe_inputs(chunks=None):
+    rng = np.random.default_rng(1)
+    case = xr.DataArray(rng.uniform(0.2, 1.2, 6), dims="case")
+    gsd_x = xr.DataArray([0.2, 0.3, 0.5], dims="range")
+    snr = xr.DataArray(rng.uniform(-1.0, 60.0, 6), dims="case")
+    if chunks:
+        case, snr = case.chunk(chunks), snr.chunk(chunks)
+    q = xr.DataArray([1.2, 2.2], dims="orientation", coords={"orientation": ["x", "y"]})
+    return dict(rer=case, eho=case + 0.5, rer_x=case, rer_y=0.9 * case, gsd_x=gsd_x,
+                gsd_y=1.1 * gsd_x, snr=snr, elevation=xr.DataArray(1.0), noise_gain=1.0, q=q,
+                noise_coefficient=0.344, calibration=metrics.GIQE_CALIBRATIONS)
+
+
+def test_giqe_by_version_keeps_each_output_on_the_dims_it_depends_on():
+    out = metrics.giqe_by_version(**_giqe_inputs())
+    # GSDs depend on the range sweep only; NIIRS and flags on both, versions first
+    assert out.gsd.dims == out.gsd_gp.dims == out.gsd_w.dims == ("range",)
+    assert out.rer_giqe5.dims == ("case",)
+    assert out.niirs.dims == ("giqe", "case", "range") and out.flags.dims[0] == "giqe"
+    assert out.giqe.values.tolist() == [3, 4, 5] and out.flags.dtype == np.int32
+    # the same numbers as each version's own function (definition)
+    inputs = _giqe_inputs()
+    gsd = np.sqrt(inputs["gsd_x"] * inputs["gsd_y"])
+    g4 = metrics.giqe4(rer=inputs["rer"], gsd=gsd, eho=inputs["eho"], snr=inputs["snr"],
+                       elevation=1.0)
+    xr.testing.assert_equal(out.niirs.sel(giqe=4, drop=True), g4.niirs)
+
+
+def test_giqe_by_version_dask_equals_eager_and_stays_lazy():
+    with dask.config.set(scheduler=raising_scheduler):
+        lazy = metrics.giqe_by_version(**_giqe_inputs(chunks=2))
+        for name in ("niirs", "flags", "rer_giqe5"):
+            assert isinstance(lazy[name].data, da.Array), name
+    xr.testing.assert_identical(lazy.compute(), metrics.giqe_by_version(**_giqe_inputs()))
+
+
+def test_edge_terms_kernel_gaussian_closed_form():
+    from xbsm.metrics import edge
+
+    # a Gaussian PSF of sigma px has ER = normal CDF, so RER = erf(1 / (2 sqrt(2) sigma))
+    nodes, w = quadrature.edge_quadrature(cutoff=4 / IFOV, ifov=IFOV,
+                                          **xbsm.method("accurate").edge_quadrature_knobs())
+    f = nodes.values
+    sigma = np.array([0.3, 0.6, 0.9])
+    otf = np.exp(-2 * np.pi**2 * (sigma[:, None] * IFOV) ** 2 * f**2)
+    rer, eho = edge._edge_terms_kernel(otf, w.values, w["sine_frequency"].values, IFOV)
+    np.testing.assert_allclose(rer, erf(1 / (2 * np.sqrt(2) * sigma)), atol=1e-6)
+    # no overshoot: the response rises monotonically, so EHO is ER(1.25 px) (IBSM Eq. 3-60)
+    np.testing.assert_allclose(eho, ndtr(1.25 / sigma), atol=1e-6)

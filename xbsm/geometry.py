@@ -1,7 +1,7 @@
 """Scenario geometry over a spherical Earth (radius 6378.164 km, the paper Sec. 2.6).
 
-Every function is plain xarray/numpy arithmetic and broadcasts over any
-scenario dimensions. Heights are above the spherical Earth's surface. [m]
+Every function broadcasts over any scenario dimensions; its arithmetic is a NumPy kernel
+under one ``xr.apply_ufunc``. Heights are above the spherical Earth's surface. [m]
 """
 
 from __future__ import annotations
@@ -20,6 +20,99 @@ FORMS = ("stable", "law-of-cosines")
 def _check_form(form):
     if form not in FORMS:
         raise ValueError(f"form must be one of {', '.join(map(repr, FORMS))}; got {form!r}")
+
+
+# ---------------------------------------------------------------------------- kernels
+# Plain NumPy in and out, no checks. Each formula takes its arguments in the order in which
+# its arithmetic first meets their dimensions, so that ``xr.apply_ufunc`` labels the result
+# with the dimension order the formula has always given. Like xarray's arithmetic, the
+# kernels give IEEE results (inf, NaN) without floating-point warnings.
+
+
+def _slant_range_stable(sensor_altitude, target_altitude, ground_range):
+    with np.errstate(all="ignore"):
+        a = EARTH_RADIUS + sensor_altitude
+        c = EARTH_RADIUS + target_altitude
+        half = np.sin(ground_range / (2.0 * EARTH_RADIUS))
+        return np.sqrt((a - c) ** 2 + 4.0 * a * c * half**2)
+
+
+def _slant_range_cosines(target_altitude, sensor_altitude, ground_range):
+    with np.errstate(all="ignore"):
+        a = EARTH_RADIUS + sensor_altitude
+        c = EARTH_RADIUS + target_altitude
+        return np.sqrt(c**2.0 + a**2.0 - 2.0 * a * c * np.cos(ground_range / EARTH_RADIUS))
+
+
+def _nadir_angle_stable(target_altitude, slant_range, sensor_altitude):
+    with np.errstate(all="ignore"):
+        a = EARTH_RADIUS + sensor_altitude
+        c = EARTH_RADIUS + target_altitude
+        sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
+        return np.arctan2(c * sine, (a - c) + c * two_half_sq)
+
+
+def _nadir_angle_cosines(target_altitude, sensor_altitude, slant_range):
+    with np.errstate(all="ignore"):
+        a = EARTH_RADIUS + sensor_altitude
+        c = EARTH_RADIUS + target_altitude
+        cosine = -(c**2.0 - a**2.0 - slant_range**2.0) / (2.0 * a * slant_range)
+        return np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0))
+
+
+def _target_elevation_kernel(sensor_altitude, target_altitude, slant_range, form):
+    with np.errstate(all="ignore"):
+        a = EARTH_RADIUS + sensor_altitude
+        c = EARTH_RADIUS + target_altitude
+        if form == "law-of-cosines":
+            cosine = (a**2.0 - c**2.0 - slant_range**2.0) / (2.0 * c * slant_range)
+            return np.arcsin(np.minimum(np.maximum(cosine, -1.0), 1.0))
+        sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
+        return np.arctan2((a - c) - a * two_half_sq, a * sine)
+
+
+def _nadir_angle_kernel(slant_range, sensor_altitude, target_altitude, form):
+    if form == "law-of-cosines":
+        return _nadir_angle_cosines(target_altitude, sensor_altitude, slant_range)
+    return _nadir_angle_stable(target_altitude, slant_range, sensor_altitude)
+
+
+def _slant_and_elevation_kernel(altitude, ground_range, form, elevation):
+    """Slant range and GIQE elevation angle of a target on the ground."""
+    if form == "law-of-cosines":
+        slant = _slant_range_cosines(0.0, altitude, ground_range)
+    else:
+        slant = _slant_range_stable(altitude, 0.0, ground_range)
+    if elevation == "look-down":
+        angle = np.pi / 2 - _nadir_angle_kernel(slant, altitude, 0.0, form)
+    else:
+        angle = _target_elevation_kernel(altitude, 0.0, slant, form)
+    return slant, angle
+
+
+def _altitude_along_path_kernel(sensor_altitude, slant_range, distance_from_target,
+                                target_altitude, form):
+    with np.errstate(all="ignore"):
+        a = EARTH_RADIUS + sensor_altitude
+        phi = _nadir_angle_kernel(slant_range, sensor_altitude, target_altitude, form)
+        b = slant_range - distance_from_target
+        return np.sqrt(a**2 + b**2 - 2.0 * a * b * np.cos(phi)) - EARTH_RADIUS
+
+
+def _ratio_kernel(numerator, denominator):
+    with np.errstate(all="ignore"):
+        return numerator / denominator
+
+
+def _product_kernel(a, b):
+    with np.errstate(all="ignore"):
+        return a * b
+
+
+def _apply(kernel, *args, n_out=1, **knobs):
+    """``kernel`` over the broadcast of ``args`` (a plain float if every one is a float)."""
+    return xr.apply_ufunc(kernel, *args, kwargs=knobs, output_core_dims=[[]] * n_out,
+                          dask="parallelized", output_dtypes=[float] * n_out)
 
 
 def slant_range(ground_range, sensor_altitude, target_altitude=0.0, *, form="stable"):
@@ -52,13 +145,10 @@ def slant_range(ground_range, sensor_altitude, target_altitude=0.0, *, form="sta
     :math:`\log_{10}(ac/R^2)` digits (7 on a 1 km path).
     """
     _check_form(form)
-    a = EARTH_RADIUS + sensor_altitude
-    c = EARTH_RADIUS + target_altitude
     if form == "law-of-cosines":
-        out = np.sqrt(c**2.0 + a**2.0 - 2.0 * a * c * np.cos(ground_range / EARTH_RADIUS))
+        out = _apply(_slant_range_cosines, target_altitude, sensor_altitude, ground_range)
     else:
-        half = np.sin(ground_range / (2.0 * EARTH_RADIUS))
-        out = np.sqrt((a - c) ** 2 + 4.0 * a * c * half**2)
+        out = _apply(_slant_range_stable, sensor_altitude, target_altitude, ground_range)
     return named(out, "m", "slant range")
 
 
@@ -106,14 +196,10 @@ def nadir_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="stab
     from nadir at 9 km).
     """
     _check_form(form)
-    a = EARTH_RADIUS + sensor_altitude
-    c = EARTH_RADIUS + target_altitude
     if form == "law-of-cosines":
-        cosine = -(c**2.0 - a**2.0 - slant_range**2.0) / (2.0 * a * slant_range)
-        out = np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0))
+        out = _apply(_nadir_angle_cosines, target_altitude, sensor_altitude, slant_range)
     else:
-        sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
-        out = np.arctan2(c * sine, (a - c) + c * two_half_sq)
+        out = _apply(_nadir_angle_stable, target_altitude, slant_range, sensor_altitude)
     return named(out, "rad", "nadir angle")
 
 
@@ -174,10 +260,9 @@ def altitude_along_path(distance_from_target, slant_range, sensor_altitude, targ
     angle, the distance of the point from the Earth centre is
     :math:`\sqrt{a^2 + b^2 - 2ab\cos\phi}`.
     """
-    a = EARTH_RADIUS + sensor_altitude
-    phi = nadir_angle(slant_range, sensor_altitude, target_altitude, form=form)
-    b = slant_range - distance_from_target
-    out = np.sqrt(a**2 + b**2 - 2.0 * a * b * np.cos(phi)) - EARTH_RADIUS
+    _check_form(form)
+    out = _apply(_altitude_along_path_kernel, sensor_altitude, slant_range, distance_from_target,
+                 target_altitude, form=form)
     return named(out, "m", "altitude along the line of sight")
 
 
@@ -196,7 +281,8 @@ def ifov(pixel_pitch, focal_length):
     float or xr.DataArray
         Angular sample spacing. [rad]
     """
-    return named(pixel_pitch / focal_length, "rad", "instantaneous field of view")
+    return named(_apply(_ratio_kernel, pixel_pitch, focal_length), "rad",
+                 "instantaneous field of view")
 
 
 def ground_sample_distance(ifov, slant_range):
@@ -214,7 +300,7 @@ def ground_sample_distance(ifov, slant_range):
     float or xr.DataArray
         Ground sample distance. [m]
     """
-    return named(ifov * slant_range, "m", "ground sample distance")
+    return named(_apply(_product_kernel, ifov, slant_range), "m", "ground sample distance")
 
 
 def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="stable"):
@@ -245,14 +331,8 @@ def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *,
     .. math:: \epsilon = \operatorname{atan2}\big((a - c) - 2a\sin^2(\theta/2),\ a\sin\theta\big)
     """
     _check_form(form)
-    a = EARTH_RADIUS + sensor_altitude
-    c = EARTH_RADIUS + target_altitude
-    if form == "law-of-cosines":
-        cosine = (a**2.0 - c**2.0 - slant_range**2.0) / (2.0 * c * slant_range)
-        return named(np.arcsin(np.minimum(np.maximum(cosine, -1.0), 1.0)), "rad",
-                     "elevation angle at the target")
-    sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
-    out = np.arctan2((a - c) - a * two_half_sq, a * sine)
+    out = _apply(_target_elevation_kernel, sensor_altitude, target_altitude, slant_range,
+                 form=form)
     return named(out, "rad", "elevation angle at the target")
 
 
@@ -278,14 +358,17 @@ def viewing_geometry(ground_range, altitude, pixel_pitch_x, pixel_pitch_y, focal
         ``slant_range`` [m], ``elevation_angle`` [rad], ``ifov_x``, ``ifov_y`` [rad],
         ``gsd_x``, ``gsd_y`` [m].
     """
-    slant = slant_range(ground_range, altitude, form=form)
-    angle = elevation_angle if elevation == "look-down" else target_elevation_angle
-    out = {"slant_range": named(xr.DataArray(slant), "m", "slant range"),
-           "elevation_angle": named(xr.DataArray(angle(slant, altitude, form=form)), "rad",
-                                    "GIQE elevation angle")}
+    _check_form(form)
+    as_da = [x if isinstance(x, xr.DataArray) else xr.DataArray(x)
+             for x in (altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length)]
+    altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length = as_da
+    slant, angle = _apply(_slant_and_elevation_kernel, altitude, ground_range, n_out=2,
+                          form=form, elevation=elevation)
+    out = {"slant_range": named(slant, "m", "slant range"),
+           "elevation_angle": named(angle, "rad", "GIQE elevation angle")}
     for axis, pitch in (("x", pixel_pitch_x), ("y", pixel_pitch_y)):
-        pixel_angle = xr.DataArray(ifov(pitch, focal_length))
+        pixel_angle = _apply(_ratio_kernel, pitch, focal_length)
         out[f"ifov_{axis}"] = named(pixel_angle, "rad", f"instantaneous field of view along {axis}")
-        out[f"gsd_{axis}"] = named(ground_sample_distance(pixel_angle, slant), "m",
+        out[f"gsd_{axis}"] = named(_apply(_product_kernel, pixel_angle, slant), "m",
                                    f"ground sample distance along {axis}")
     return xr.Dataset(out)

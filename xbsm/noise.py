@@ -7,6 +7,76 @@ import xarray as xr
 
 from ._metadata import named
 
+# NumPy kernels (plain arrays in and out, no checks); the public functions below wrap them
+# in one ``xr.apply_ufunc`` each, which broadcasts, aligns and carries dask. Like xarray's
+# arithmetic, they give IEEE results (inf, NaN) without floating-point warnings.
+
+
+def _quantization_noise_kernel(well_range, bit_depth):
+    with np.errstate(all="ignore"):
+        return well_range / (np.sqrt(12) * (2.0**bit_depth - 1.0))
+
+
+def _shot_noise_kernel(photoelectrons):
+    with np.errstate(all="ignore"):
+        return np.sqrt(photoelectrons)
+
+
+def _dark_current_noise_kernel(tdi_stages, dark_current, integration_time):
+    with np.errstate(all="ignore"):
+        return np.sqrt(tdi_stages * dark_current * integration_time)
+
+
+def _total_noise_kernel(shot_variance, quantization, read, other):
+    with np.errstate(all="ignore"):
+        return np.sqrt(shot_variance + quantization**2 + read**2 + other**2)
+
+
+def _stacked_snr_kernel(frame_stacks, snr):
+    with np.errstate(all="ignore"):
+        return np.sqrt(frame_stacks) * snr
+
+
+def _chain_total_kernel(target, background, well_range, bit_depth, read, other):
+    """Total noise of the brighter of target and background [rms electrons]."""
+    quantization = _quantization_noise_kernel(well_range, bit_depth)
+    return _total_noise_kernel(np.maximum(target, background), quantization, read, other)
+
+
+def _snr_frame_kernel(contrast, target, background, well_range, bit_depth, read, other):
+    total = _chain_total_kernel(target, background, well_range, bit_depth, read, other)
+    with np.errstate(all="ignore"):
+        return contrast / total
+
+
+def _snr_kernel(frame_stacks, contrast, target, background, well_range, bit_depth, read, other):
+    snr_frame = _snr_frame_kernel(contrast, target, background, well_range, bit_depth, read, other)
+    return _stacked_snr_kernel(frame_stacks, snr_frame)
+
+
+def _shot_noise_of_brighter_kernel(target, background):
+    return _shot_noise_kernel(np.maximum(target, background))
+
+
+def _rate_noise_kernel(rate, integration_time, tdi_stages):
+    """Shot noise of a photoelectron rate over every TDI stage [rms electrons]."""
+    with np.errstate(all="ignore"):
+        return np.sqrt(rate * (integration_time * tdi_stages))
+
+
+def _scene_noise_kernel(target_rate, integration_time, tdi_stages, background_rate, path_rate):
+    """Scene noise of the brighter of target and background, less the path term."""
+    with np.errstate(all="ignore"):
+        exposure = integration_time * tdi_stages
+        scene_and_path = np.maximum(np.sqrt(target_rate * exposure),
+                                    np.sqrt(background_rate * exposure))
+        return np.sqrt(scene_and_path**2 - np.sqrt(path_rate * exposure) ** 2)
+
+
+def _apply(kernel, *args):
+    """``kernel`` over the broadcast of ``args`` (a plain float if every one is a float)."""
+    return xr.apply_ufunc(kernel, *args, dask="parallelized", output_dtypes=[float])
+
 
 def shot_noise(photoelectrons):
     """Photon shot noise of a photoelectron count (Poisson).
@@ -21,7 +91,7 @@ def shot_noise(photoelectrons):
     float or xr.DataArray
         [rms electrons]
     """
-    return named(np.sqrt(photoelectrons), "count", "shot noise")
+    return named(_apply(_shot_noise_kernel, photoelectrons), "count", "shot noise")
 
 
 def dark_current_noise(dark_current, integration_time, tdi_stages=1.0):
@@ -41,9 +111,8 @@ def dark_current_noise(dark_current, integration_time, tdi_stages=1.0):
     float or xr.DataArray
         [rms electrons]
     """
-    return named(
-        np.sqrt(tdi_stages * dark_current * integration_time), "count", "dark current noise"
-    )
+    return named(_apply(_dark_current_noise_kernel, tdi_stages, dark_current, integration_time),
+                 "count", "dark current noise")
 
 
 def quantization_noise(well_range, bit_depth):
@@ -67,9 +136,8 @@ def quantization_noise(well_range, bit_depth):
 
     .. math:: \sigma_q = \frac{N_{range}}{\sqrt{12}\,(2^b - 1)}
     """
-    return named(
-        well_range / (np.sqrt(12) * (2.0**bit_depth - 1.0)), "count", "quantization noise"
-    )
+    return named(_apply(_quantization_noise_kernel, well_range, bit_depth), "count",
+                 "quantization noise")
 
 
 def noise_gain(kernel: xr.DataArray):
@@ -110,7 +178,7 @@ def total_noise(shot_variance, quantization, read, other):
     xr.DataArray
         [rms electrons]
     """
-    out = np.sqrt(shot_variance + quantization**2 + read**2 + other**2)
+    out = _apply(_total_noise_kernel, shot_variance, quantization, read, other)
     return named(out, "count", "total noise")
 
 
@@ -129,7 +197,8 @@ def stacked_snr(snr, frame_stacks):
     xr.DataArray
         [1]
     """
-    return named(np.sqrt(frame_stacks) * snr, "1", "contrast signal-to-noise ratio")
+    return named(_apply(_stacked_snr_kernel, frame_stacks, snr), "1",
+                 "contrast signal-to-noise ratio")
 
 
 def noise_terms(signal: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
@@ -159,32 +228,32 @@ def noise_terms(signal: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
     background, without the sensor's own irradiance, less the path term.
     """
     s = sensor
-    exposure = signal["effective_integration_time"] * s["tdi_stages"]
-    brighter = np.maximum(signal["target_photoelectrons"], signal["background_photoelectrons"])
-    quantization = quantization_noise(s["max_well"], s["bit_depth"])
-    total = total_noise(brighter, quantization, s["read_noise"], s["other_noise"])
-    snr_frame = signal["contrast_photoelectrons"] / total
-    path = np.sqrt(signal["path_rate"] * exposure)
-    scene_and_path = np.maximum(np.sqrt(signal["target_scene_rate"] * exposure),
-                                np.sqrt(signal["background_scene_rate"] * exposure))
-    with np.errstate(invalid="ignore"):
-        scene = np.sqrt(scene_and_path**2 - path**2)
+    time, tdi = signal["effective_integration_time"], s["tdi_stages"]
+    target, background = signal["target_photoelectrons"], signal["background_photoelectrons"]
+    chain = (target, background, s["max_well"], s["bit_depth"], s["read_noise"], s["other_noise"])
+    contrast = signal["contrast_photoelectrons"]
     rms = "count"
     return xr.Dataset({
-        "snr": stacked_snr(snr_frame, s["frame_stacks"]).assign_attrs(
-            long_name="contrast signal-to-noise ratio after frame stacking"),
-        "snr_frame": named(snr_frame, "1", "single-frame contrast signal-to-noise ratio"),
-        "shot_noise": named(shot_noise(brighter), rms, "shot noise"),
-        "scene_noise": named(scene, rms, "scene noise"),
-        "path_noise": named(path, rms, "path radiance noise"),
-        "self_emission_noise": named(np.sqrt(signal["sensor_rate"] * exposure), rms,
-                                     "self-emission and stray-light noise"),
+        "snr": named(_apply(_snr_kernel, s["frame_stacks"], contrast, *chain), "1",
+                     "contrast signal-to-noise ratio after frame stacking"),
+        "snr_frame": named(_apply(_snr_frame_kernel, contrast, *chain), "1",
+                           "single-frame contrast signal-to-noise ratio"),
+        "shot_noise": named(_apply(_shot_noise_of_brighter_kernel, target, background), rms,
+                            "shot noise"),
+        "scene_noise": named(_apply(_scene_noise_kernel, signal["target_scene_rate"], time, tdi,
+                                    signal["background_scene_rate"], signal["path_rate"]),
+                             rms, "scene noise"),
+        "path_noise": named(_apply(_rate_noise_kernel, signal["path_rate"], time, tdi), rms,
+                            "path radiance noise"),
+        "self_emission_noise": named(_apply(_rate_noise_kernel, signal["sensor_rate"], time, tdi),
+                                     rms, "self-emission and stray-light noise"),
         "dark_current_noise": named(
-            dark_current_noise(s["dark_current"], signal["effective_integration_time"],
-                               s["tdi_stages"]),
-            rms, "dark current noise"),
-        "quantization_noise": named(xr.DataArray(quantization), rms, "quantization noise"),
+            _apply(_dark_current_noise_kernel, tdi, s["dark_current"], time), rms,
+            "dark current noise"),
+        "quantization_noise": named(
+            _apply(_quantization_noise_kernel, s["max_well"], s["bit_depth"]), rms,
+            "quantization noise"),
         "read_noise": named(s["read_noise"], rms, "read noise"),
         "other_noise": named(s["other_noise"], rms, "other noise"),
-        "total_noise": named(total, rms, "total noise"),
+        "total_noise": named(_apply(_chain_total_kernel, *chain), rms, "total noise"),
     })

@@ -22,7 +22,6 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._contract import contract
 from .._metadata import named
 
 __all__ = [
@@ -72,21 +71,64 @@ def _check_slice(otf_slice, weights):
             )
 
 
-def _edge_kernels(weights, ifov, position, need_cosine):
-    """Sine (and cosine) tables: depend on (frequency, position, ifov) only.
+def _edge_response_kernel(otf, weights, abscissa, ifov, position):
+    """Edge response at ``position`` [px] (NumPy; the quadrature along the last axis).
 
-    The abscissa is the ``sine_frequency`` coordinate of ``weights`` (else its
-    ``frequency`` coordinate); it may carry sensor dimensions besides
-    ``frequency`` when every sensor of a sweep has nodes of its own.
+    ``otf``, ``weights`` and ``abscissa`` carry the frequency samples on their last axis;
+    ``ifov`` and ``position`` broadcast against the other axes. The sine (and cosine) table
+    has the shape of the broadcast of weights, abscissa, ifov and position only: computed
+    once, then contracted with the OTF, whatever the OTF's other axes.
     """
-    f = weights.coords["sine_frequency"] if "sine_frequency" in weights.coords else weights[
-        "frequency"]
-    f = f.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
-    w = weights.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
-    phase = 2.0 * np.pi * f * ifov * position
-    sine = w * np.sin(phase) / f
-    cosine = w * np.cos(phase) / f if need_cosine else None
-    return sine, cosine
+    with np.errstate(all="ignore"):  # IEEE results without warnings, as xarray's arithmetic
+        phase = (2.0 * np.pi * abscissa * np.asarray(ifov)[..., None]
+                 * np.asarray(position)[..., None])
+        sine = weights * np.sin(phase) / abscissa
+        if np.iscomplexobj(otf):
+            cosine = weights * np.cos(phase) / abscissa
+            integral = _sum_of_products(otf.real, sine) + _sum_of_products(otf.imag, cosine)
+        else:
+            integral = _sum_of_products(otf, sine)
+        return 0.5 + integral / np.pi
+
+
+def _sum_of_products(a, b):
+    return np.einsum("...k,...k->...", a, b)
+
+
+def _eho_kernel(er):
+    """EHO from the edge response at :data:`EHO_POSITIONS` along the last axis."""
+    rising = (np.diff(er, axis=-1) > 0).all(axis=-1)
+    return np.where(rising, er[..., 1], er.max(axis=-1))  # er[..., 1]: 1.25 px
+
+
+def _edge_terms_kernel(otf, weights, abscissa, ifov, rer=True, eho=True):
+    """RER and/or EHO (in that order) from one edge response at the positions they need."""
+    positions = np.concatenate([RER_POSITIONS] * rer + [EHO_POSITIONS] * eho)
+    er = _edge_response_kernel(otf[..., None, :], weights[..., None, :],
+                               abscissa[..., None, :], np.asarray(ifov)[..., None], positions)
+    out = ([er[..., 1] - er[..., 0]] if rer else []) + (
+        [_eho_kernel(er[..., -EHO_POSITIONS.size:])] if eho else [])
+    return tuple(out) if len(out) > 1 else out[0]
+
+
+def _apply_edge(kernel, otf_slice, weights, *args, n_out=1, **knobs):
+    """``kernel`` over (OTF, weights, abscissa, *args) with ``frequency`` as the core dimension.
+
+    The abscissa is the ``sine_frequency`` coordinate of ``weights`` (else its ``frequency``
+    coordinate); it may carry sensor dimensions besides ``frequency`` when every sensor of a
+    sweep has nodes of its own. Auxiliary coordinates of the OTF and the weights are dropped.
+    """
+    _check_slice(otf_slice, weights)
+    abscissa = weights.coords["sine_frequency"] if "sine_frequency" in weights.coords else (
+        weights["frequency"])
+    dtype = np.result_type(np.finfo(otf_slice.dtype).dtype, weights.dtype,
+                           *(np.asarray(a).dtype for a in args))
+    return xr.apply_ufunc(
+        kernel, otf_slice.reset_coords(drop=True), weights.reset_coords(drop=True),
+        abscissa.variable, *args, kwargs=knobs,
+        input_core_dims=[["frequency"]] * 3 + [[]] * len(args),
+        output_core_dims=[[]] * n_out, dask="parallelized", output_dtypes=[dtype] * n_out,
+        dask_gufunc_kwargs={"allow_rechunk": True})
 
 
 def edge_response(otf_slice, ifov, position, weights):
@@ -128,17 +170,7 @@ def edge_response(otf_slice, ifov, position, weights):
     The sine and cosine tables depend only on (frequency, position, ifov)
     and are computed once, then contracted with the OTF by a dot product.
     """
-    _check_slice(otf_slice, weights)
-    pos = _as_position(position)
-    complex_input = otf_slice.dtype.kind == "c"
-    sine, cosine = _edge_kernels(weights, ifov, pos, complex_input)
-    h = otf_slice.reset_coords(drop=True).drop_vars("frequency", errors="ignore")
-    if complex_input:
-        integral = (contract(np.real(h), sine, "frequency")
-                    + contract(np.imag(h), cosine, "frequency"))
-    else:
-        integral = contract(h, sine, "frequency")
-    out = 0.5 + integral / np.pi
+    out = _apply_edge(_edge_response_kernel, otf_slice, weights, ifov, _as_position(position))
     return named(out, "1", "edge response", references="IBSM Eq. 3-63")
 
 
@@ -165,19 +197,8 @@ def relative_edge_response(otf_slice, ifov, weights):
 
     .. math:: RER = ER(+\tfrac{1}{2}) - ER(-\tfrac{1}{2})
     """
-    er = edge_response(otf_slice, ifov, RER_POSITIONS, weights)
-    rer = er.sel(position=0.5, drop=True) - er.sel(position=-0.5, drop=True)
+    rer = _apply_edge(_edge_terms_kernel, otf_slice, weights, ifov, eho=False)
     return named(rer, "1", "relative edge response", references="IBSM Eq. 3-61")
-
-
-def _eho_from_er(er):
-    rising = (er.diff("position") > 0).all("position")
-    eho = xr.where(
-        rising,
-        er.sel(position=1.25, drop=True),
-        er.max("position", skipna=False),
-    )
-    return named(eho, "1", "edge height overshoot", references="IBSM Eq. 3-60")
 
 
 def edge_height_overshoot(otf_slice, ifov, weights):
@@ -211,8 +232,8 @@ def edge_height_overshoot(otf_slice, ifov, weights):
 
     This is pyBSM 0.16.1's rule (strict increase; a NaN anywhere gives NaN).
     """
-    er = edge_response(otf_slice, ifov, EHO_POSITIONS, weights)
-    return _eho_from_er(er)
+    eho = _apply_edge(_edge_terms_kernel, otf_slice, weights, ifov, rer=False)
+    return named(eho, "1", "edge height overshoot", references="IBSM Eq. 3-60")
 
 
 def edge_terms(otf_slice, ifov, weights):
@@ -232,9 +253,8 @@ def edge_terms(otf_slice, ifov, weights):
     xr.Dataset
         ``rer`` (IBSM Eq. 3-61) and ``eho`` (IBSM Eq. 3-60). [1]
     """
-    positions = np.concatenate([RER_POSITIONS, EHO_POSITIONS])
-    er = edge_response(otf_slice, ifov, positions, weights)
-    rer = er.sel(position=0.5, drop=True) - er.sel(position=-0.5, drop=True)
-    rer = named(rer, "1", "relative edge response", references="IBSM Eq. 3-61")
-    eho = _eho_from_er(er.sel(position=EHO_POSITIONS))
-    return xr.Dataset({"rer": rer, "eho": eho})
+    rer, eho = _apply_edge(_edge_terms_kernel, otf_slice, weights, ifov, n_out=2)
+    return xr.Dataset({
+        "rer": named(rer, "1", "relative edge response", references="IBSM Eq. 3-61"),
+        "eho": named(eho, "1", "edge height overshoot", references="IBSM Eq. 3-60"),
+    })

@@ -11,8 +11,6 @@ is outside the version's calibration. RER and EHO come from
 from __future__ import annotations
 
 import dataclasses
-import functools
-import operator
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -53,6 +51,10 @@ GIQE_REFERENCES = MappingProxyType({
 })
 """The published source of each GIQE version's equation, by version (read-only): the
 ``references`` attribute of its ``niirs``."""
+
+
+_GSD_W_REFERENCE = "Harrington et al., NGA GIQE 5.0, 2015, Eq. 5"
+_RER5_REFERENCE = "Harrington et al., NGA GIQE 5.0, 2015, Eq. 7"
 
 
 def _da(x):
@@ -259,6 +261,184 @@ def _check_calibration(calibration):
     return calibration
 
 
+# ---------------------------------------------------------------------------- kernels
+# Plain NumPy in and out, no checks, no xarray: the arithmetic of every GIQE function runs
+# here once per call, over arrays that ``xr.apply_ufunc`` has aligned and broadcast; the
+# public functions below only label the results (and carry dask). Like xarray's arithmetic,
+# the kernels give IEEE results (inf, NaN) without floating-point warnings; NaN marks what
+# the flags report.
+
+
+def _sampling_q_kernel(wavelength, aperture_diameter, ifov):
+    with np.errstate(all="ignore"):
+        return wavelength / (aperture_diameter * ifov)
+
+
+def _geometric_mean_kernel(a, b):
+    with np.errstate(all="ignore"):
+        return np.sqrt(a * b)
+
+
+def _ground_plane_kernel(gsd, elevation, power):
+    """GSD / sin(elevation)^power; NaN where sin(elevation) <= 0."""
+    sin_el = np.sin(elevation)
+    with np.errstate(all="ignore"):
+        out = gsd / (sin_el**power)
+    return np.where(sin_el > 0, out, np.nan)
+
+
+def _giqe3_kernel(rer, gsd, eho, noise_gain, snr):
+    with np.errstate(all="ignore"):
+        # log10(RER) - log10(GSD) rather than log10(RER / GSD): no underflow for tiny RER
+        niirs = (
+            11.81 + 3.32 * (np.log10(rer) - np.log10(gsd / INCH)) - 1.48 * eho - noise_gain / snr
+        )
+    return np.where((snr > 0) & (rer > 0) & (gsd > 0) & np.isfinite(niirs), niirs, np.nan)
+
+
+def _giqe4_kernel(rer, gsd, elevation, eho, noise_gain, snr, noise_coefficient):
+    sin_el = np.sin(elevation)
+    gsd_gp = _ground_plane_kernel(gsd, elevation, 0.5)
+    c1 = np.where(rer >= 0.9, 3.32, 3.16)
+    c2 = np.where(rer >= 0.9, 1.559, 2.817)
+    with np.errstate(all="ignore"):
+        niirs = (
+            10.251
+            - c1 * np.log10(gsd_gp / INCH)
+            + c2 * np.log10(rer)
+            - 0.656 * eho
+            - noise_coefficient * noise_gain / snr
+        )
+    keep = (snr > 0) & (rer > 0) & (gsd > 0) & (sin_el > 0) & np.isfinite(niirs)
+    return np.where(keep, niirs, np.nan)
+
+
+def _giqe5_rer_kernel(rer_x, rer_y):
+    hi, lo = np.maximum(rer_x, rer_y), np.minimum(rer_x, rer_y)
+    with np.errstate(all="ignore"):
+        return (hi * lo**2.0) ** (1.0 / 3.0)
+
+
+def _giqe5_kernel(gsd, elevation, snr, rer_x, rer_y):
+    rer = _giqe5_rer_kernel(rer_x, rer_y)
+    sin_el = np.sin(elevation)
+    gsd_w = _ground_plane_kernel(gsd, elevation, 0.25)
+    with np.errstate(all="ignore"):
+        log_rer = np.log10(rer)
+        niirs = (
+            9.57
+            - 3.32 * np.log10(gsd_w / INCH)
+            + 3.32 * (1 - np.exp(-1.9 / snr)) * log_rer
+            - 2.0 * log_rer**4.0
+            - 1.8 / snr
+        )
+    keep = (snr > 0) & (rer > 0) & (gsd > 0) & (sin_el > 0) & np.isfinite(niirs)
+    return np.where(keep, niirs, np.nan)
+
+
+def _niirs_by_version_kernel(rer, gsd_x, gsd_y, eho, noise_gain, snr, elevation, rer_x, rer_y,
+                             noise_coefficient):
+    """NIIRS by GIQE 3, 4 and 5 along a new last axis (GIQE 5 on gsd_x, as pyBSM's niirs5)."""
+    gsd = _geometric_mean_kernel(gsd_x, gsd_y)
+    niirs3 = _giqe3_kernel(rer, gsd, eho, noise_gain, snr)
+    niirs4 = _giqe4_kernel(rer, gsd, elevation, eho, noise_gain, snr, noise_coefficient)
+    niirs5 = _giqe5_kernel(gsd_x, elevation, snr, rer_x, rer_y)
+    return np.stack(np.broadcast_arrays(niirs3, niirs4, niirs5), axis=-1)
+
+
+def _condition(kind, value, lo, hi):
+    """Where ``value`` fails one calibration test (NaN fails every test but "nonpositive")."""
+    if kind == "nonpositive":
+        return value <= 0
+    if kind == "not_positive":
+        return ~(value > 0)
+    outside = ~((value >= lo) & (value <= hi))
+    return outside.any(axis=-1) if kind == "any_outside" else outside  # any: over orientation
+
+
+def _flags_kernel(*arrays, tests, versions):
+    """int32 flag bits of one or more GIQE versions.
+
+    ``tests`` holds one ``(version, bit, kind, lo, hi, array index, column)`` per test (kind
+    as in :func:`_condition`; ``column`` picks that version's NIIRS from a last axis);
+    ``versions`` is None for one result, else the number of versions along a new last axis.
+    """
+    bits = [np.int32(0)] * (versions or 1)
+    for version, bit, kind, lo, hi, index, column in tests:
+        value = arrays[index] if column is None else arrays[index][..., column]
+        hit = _condition(kind, value, lo, hi)
+        bits[version] = bits[version] | np.where(hit, np.int32(bit), np.int32(0))
+    if versions is None:
+        return bits[0]
+    return np.stack(np.broadcast_arrays(*bits), axis=-1)
+
+
+# ---------------------------------------------------------------- the xarray layer
+
+
+def _apply(kernel, *args, core=None, **knobs):
+    """``kernel`` over the broadcast of the DataArrays ``args``: one float result (dask-parallel).
+
+    ``core`` names a new last dimension of the result and its length (e.g. ``("giqe", 3)``).
+    """
+    dtype = np.result_type(*(a.dtype for a in args), np.float32)  # as NumPy's arithmetic gives
+    return xr.apply_ufunc(kernel, *args, kwargs=knobs, output_core_dims=[[core[0]] if core else []],
+                          dask="parallelized", output_dtypes=[dtype],
+                          dask_gufunc_kwargs={"output_sizes": dict([core]) if core else {}})
+
+
+def _dims_in_order(*dims):
+    """Dimension names in order of first appearance (the order xarray broadcasting gives)."""
+    return tuple(dict.fromkeys(d for group in dims for d in group))
+
+
+def _version_tests(calibration, values, version=0, niirs_column=None):
+    """The arrays one GIQE version's flags test, and the tests, in :func:`giqe_flags`'s order.
+
+    ``values`` maps snr, rer, gsd, gsd_ground_plane, elevation, q and niirs to DataArrays
+    (or None: not tested). Returns (arrays, tests) with tests as :func:`_flags_kernel`
+    takes them, the array index standing for an entry of ``arrays``.
+    """
+    checks = [("snr_nonpositive", "snr", "nonpositive", (0.0, 0.0)),
+              ("rer_nonpositive", "rer", "not_positive", (0.0, 0.0))]
+    for name, key in (("snr_out_of_range", "snr"), ("rer_out_of_range", "rer"),
+                      ("gsd_out_of_range", "gsd"), ("gsd_out_of_range", "gsd_ground_plane"),
+                      ("elevation_out_of_range", "elevation"), ("q_out_of_range", "q"),
+                      ("niirs_out_of_scale", "niirs")):
+        lo_hi = getattr(calibration, key)
+        if values.get(key) is not None and lo_hi is not None:
+            kind = "any_outside" if key == "q" and "orientation" in values[key].dims else "outside"
+            checks.append((name, key, kind, lo_hi))
+    arrays, tests = [], []
+    for name, key, kind, (lo, hi) in checks:
+        arrays.append(values[key])
+        column = niirs_column if key == "niirs" else None
+        tests.append((version, _flags.flag(name), kind, lo, hi, len(arrays) - 1, column))
+    return arrays, tests
+
+
+def _label_flags(arrays, tests, versions=None, long_name="GIQE validity flags"):
+    """One ``apply_ufunc`` of :func:`_flags_kernel` over the tested arrays (each passed once)."""
+    unique, where = [], {}
+    for array in arrays:
+        where.setdefault(id(array), len(unique))
+        if where[id(array)] == len(unique):
+            unique.append(array)
+    tests = tuple((*t[:5], where[id(arrays[t[5]])], t[6]) for t in tests)
+    core = [[] for _ in unique]
+    for _, _, kind, _, _, index, column in tests:
+        core[index] = (["orientation"] if kind == "any_outside"
+                       else ["giqe"] if column is not None else [])
+    out = xr.apply_ufunc(
+        _flags_kernel, *unique, kwargs={"tests": tests, "versions": versions},
+        input_core_dims=core, output_core_dims=[["giqe"] if versions else []],
+        dask="parallelized", output_dtypes=[np.int32],
+        dask_gufunc_kwargs={"allow_rechunk": True,
+                            "output_sizes": {"giqe": versions} if versions else {}})
+    out.attrs = _flags.flag_attrs(long_name)
+    return out
+
+
 def sampling_q(wavelength, aperture_diameter, ifov):
     r"""Sampling ratio Q of an optics and detector: wavelength x f-number / pixel pitch.
 
@@ -282,14 +462,8 @@ def sampling_q(wavelength, aperture_diameter, ifov):
 
     NGA GIQE 5 report (2015), which assumes 1 <= Q <= 2.
     """
-    q = _da(wavelength) / (_da(aperture_diameter) * _da(ifov))
+    q = _apply(_sampling_q_kernel, _da(wavelength), _da(aperture_diameter), _da(ifov))
     return named(q, "1", "sampling ratio Q = lambda N / p")
-
-
-def _outside(value, lo_hi):
-    lo, hi = lo_hi
-    v = xr.DataArray(value) if not isinstance(value, xr.DataArray) else value
-    return ~((v >= lo) & (v <= hi))
 
 
 def giqe_flags(*, snr, rer, gsd, elevation=None, niirs=None, calibration=GIQE4_CALIBRATION,
@@ -329,31 +503,10 @@ def giqe_flags(*, snr, rer, gsd, elevation=None, niirs=None, calibration=GIQE4_C
         given, is not tested.
     """
     cal = _check_calibration(calibration)
-    conds = {"snr_nonpositive": _da(snr) <= 0, "rer_nonpositive": ~(_da(rer) > 0)}
-    tests = (
-        ("snr_out_of_range", snr, cal.snr),
-        ("rer_out_of_range", rer, cal.rer),
-        ("gsd_out_of_range", gsd, cal.gsd),
-        ("gsd_out_of_range", gsd_ground_plane, cal.gsd_ground_plane),
-        ("elevation_out_of_range", elevation, cal.elevation),
-        ("q_out_of_range", q, cal.q),
-        ("niirs_out_of_scale", niirs, cal.niirs),
-    )
-    for name, value, lo_hi in tests:
-        if value is None or lo_hi is None:
-            continue
-        cond = _outside(value, lo_hi)
-        if name == "q_out_of_range" and "orientation" in cond.dims:
-            cond = cond.any("orientation")
-        conds[name] = conds[name] | cond if name in conds else cond
-    # one alignment for every condition, then the bits in plain (numpy or dask) arithmetic
-    aligned = xr.broadcast(*conds.values())
-    bits = functools.reduce(operator.or_, (
-        np.where(cond.data, np.int32(_flags.flag(name)), np.int32(0))
-        for name, cond in zip(conds, aligned, strict=True)))
-    out = aligned[0].copy(data=bits.astype(np.int32))
-    out.attrs = _flags.flag_attrs("GIQE validity flags")
-    return out
+    values = {"snr": snr, "rer": rer, "gsd": gsd, "gsd_ground_plane": gsd_ground_plane,
+              "elevation": elevation, "q": q, "niirs": niirs}
+    values = {key: None if value is None else _da(value) for key, value in values.items()}
+    return _label_flags(*_version_tests(cal, values))
 
 
 def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
@@ -394,16 +547,11 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
     """
     _check_calibration(calibration)
     rer, gsd, eho, snr, noise_gain = map(_da, (rer, gsd, eho, snr, noise_gain))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        # log10(RER) - log10(GSD) rather than log10(RER / GSD): no underflow for tiny RER
-        niirs = (
-            11.81 + 3.32 * (np.log10(rer) - np.log10(gsd / INCH)) - 1.48 * eho - noise_gain / snr
-        )
-    niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & np.isfinite(niirs))
-    niirs = named(niirs, "1", "NIIRS (GIQE 3)", references=GIQE_REFERENCES[3])
-    fl = giqe_flags(snr=snr, rer=rer, gsd=gsd, elevation=elevation, niirs=niirs,
-                    calibration=calibration)
-    return xr.Dataset({"niirs": niirs, "flags": fl})
+    niirs = named(_apply(_giqe3_kernel, rer, gsd, eho, noise_gain, snr), "1", "NIIRS (GIQE 3)",
+                  references=GIQE_REFERENCES[3])
+    values = {"snr": snr, "rer": rer, "gsd": gsd, "niirs": niirs,
+              "elevation": None if elevation is None else _da(elevation)}
+    return xr.Dataset({"niirs": niirs, "flags": _label_flags(*_version_tests(calibration, values))})
 
 
 def giqe4(
@@ -464,27 +612,13 @@ def giqe4(
     rer, gsd, eho, snr, elevation, noise_gain = map(
         _da, (rer, gsd, eho, snr, elevation, noise_gain)
     )
-    sin_el = np.sin(elevation)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        gsd_gp = gsd / (sin_el**0.5)
-    gsd_gp = gsd_gp.where(sin_el > 0)
-    c1 = xr.where(rer >= 0.9, 3.32, 3.16)
-    c2 = xr.where(rer >= 0.9, 1.559, 2.817)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        niirs = (
-            10.251
-            - c1 * np.log10(gsd_gp / INCH)
-            + c2 * np.log10(rer)
-            - 0.656 * eho
-            - noise_coefficient * noise_gain / snr
-        )
-    niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & (sin_el > 0) & np.isfinite(niirs))
-    niirs = named(niirs, "1", "NIIRS (GIQE 4)", references=GIQE_REFERENCES[4])
-    gsd_gp = named(gsd_gp, "m", "ground-plane geometric-mean GSD",
-                   references=GIQE_REFERENCES[4])
-    fl = giqe_flags(
-        snr=snr, rer=rer, gsd=gsd_gp, elevation=elevation, niirs=niirs, calibration=calibration
-    )
+    gsd_gp = named(_apply(_ground_plane_kernel, gsd, elevation, power=0.5), "m",
+                   "ground-plane geometric-mean GSD", references=GIQE_REFERENCES[4])
+    niirs = named(_apply(_giqe4_kernel, rer, gsd, elevation, eho, noise_gain, snr,
+                         noise_coefficient=noise_coefficient),
+                  "1", "NIIRS (GIQE 4)", references=GIQE_REFERENCES[4])
+    values = {"snr": snr, "rer": rer, "gsd": gsd_gp, "elevation": elevation, "niirs": niirs}
+    fl = _label_flags(*_version_tests(calibration, values))
     return xr.Dataset({"niirs": niirs, "gsd_gp": gsd_gp, "flags": fl})
 
 
@@ -507,12 +641,9 @@ def giqe5_rer(rer_x, rer_y):
 
     .. math:: RER = \left(\max(R_x, R_y)\,\min(R_x, R_y)^2\right)^{1/3}
     """
-    rer_x, rer_y = _da(rer_x), _da(rer_y)
-    hi, lo = np.maximum(rer_x, rer_y), np.minimum(rer_x, rer_y)
-    with np.errstate(invalid="ignore"):
-        out = (hi * lo**2.0) ** (1.0 / 3.0)
+    out = _apply(_giqe5_rer_kernel, _da(rer_x), _da(rer_y))
     return named(out, "1", "GIQE 5 weighted relative edge response",
-                 references="Harrington et al., NGA GIQE 5.0, 2015, Eq. 7")
+                 references=_RER5_REFERENCE)
 
 
 def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q=None):
@@ -556,32 +687,25 @@ def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q
                 - 2\,(\log_{10}RER)^4 - 1.8/SNR
     """
     _check_calibration(calibration)
-    gsd, snr, elevation = map(_da, (gsd, snr, elevation))
+    rer_x, rer_y, gsd, snr, elevation = map(_da, (rer_x, rer_y, gsd, snr, elevation))
     rer = giqe5_rer(rer_x, rer_y)
-    sin_el = np.sin(elevation)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        gsd_w = gsd / (sin_el**0.25)
-    gsd_w = gsd_w.where(sin_el > 0)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        log_rer = np.log10(rer)
-        niirs = (
-            9.57
-            - 3.32 * np.log10(gsd_w / INCH)
-            + 3.32 * (1 - np.exp(-1.9 / snr)) * log_rer
-            - 2.0 * log_rer**4.0
-            - 1.8 / snr
-        )
-    niirs = niirs.where((snr > 0) & (rer > 0) & (gsd > 0) & (sin_el > 0) & np.isfinite(niirs))
-    niirs = named(niirs, "1", "NIIRS (GIQE 5)", references=GIQE_REFERENCES[5])
-    gsd_w = named(gsd_w, "m", "elevation-weighted GSD",
-                  references="Harrington et al., NGA GIQE 5.0, 2015, Eq. 5")
-    with np.errstate(divide="ignore", invalid="ignore"):
-        gsd_gp = (gsd / (sin_el**0.5)).where(sin_el > 0)
-    fl = giqe_flags(
-        snr=snr, rer=rer, gsd=gsd_w, elevation=elevation, niirs=niirs, calibration=calibration,
-        gsd_ground_plane=gsd_gp, q=q,
-    )
+    gsd_w = named(_apply(_ground_plane_kernel, gsd, elevation, power=0.25), "m",
+                  "elevation-weighted GSD", references=_GSD_W_REFERENCE)
+    niirs = named(_apply(_giqe5_kernel, gsd, elevation, snr, rer_x, rer_y), "1", "NIIRS (GIQE 5)",
+                  references=GIQE_REFERENCES[5])
+    fl = _label_flags(*_version_tests(calibration, _giqe5_tested(
+        calibration, snr=snr, rer=rer, gsd=gsd, gsd_w=gsd_w, elevation=elevation, q=q,
+        niirs=niirs)))
     return xr.Dataset({"niirs": niirs, "gsd_w": gsd_w, "rer": rer, "flags": fl})
+
+
+def _giqe5_tested(calibration, *, snr, rer, gsd, gsd_w, elevation, q, niirs):
+    """What GIQE 5's flags test: its RER, gsd_w and the ground-plane GSD of ``gsd``."""
+    gsd_gp = None
+    if calibration.gsd_ground_plane is not None:  # GSD / sqrt(sin(elevation))
+        gsd_gp = _apply(_ground_plane_kernel, gsd, elevation, power=0.5)
+    return {"snr": snr, "rer": rer, "gsd": gsd_w, "gsd_ground_plane": gsd_gp,
+            "elevation": elevation, "q": None if q is None else _da(q), "niirs": niirs}
 
 
 #: The GIQE versions :func:`giqe_by_version` evaluates, in order along ``giqe``.
@@ -620,30 +744,63 @@ def giqe_by_version(*, rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noi
         mean), ``gsd_gp`` (GIQE 4 ground plane), ``gsd_w`` (GIQE 5) [m];
         ``noise_gain`` [1].
     """
-    gsd = named(xr.DataArray(np.sqrt(gsd_x * gsd_y)), "m",
+    rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain = map(
+        _da, (rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain))
+    gsd = named(_apply(_geometric_mean_kernel, gsd_x, gsd_y), "m",
                 "ground sample distance (geometric mean)")
-    common = dict(rer=rer, gsd=gsd, eho=eho, snr=snr, noise_gain=noise_gain,
-                  elevation=elevation)
-    g3 = giqe3(**common, calibration=calibration[3])
-    g4 = giqe4(**common, noise_coefficient=noise_coefficient, calibration=calibration[4])
-    g5 = giqe5(rer_x=rer_x, rer_y=rer_y, gsd=gsd_x, snr=snr, elevation=elevation,
-               calibration=calibration[5], q=q)
+    gsd_gp = named(_apply(_ground_plane_kernel, gsd, elevation, power=0.5), "m",
+                   "ground-plane geometric-mean GSD", references=GIQE_REFERENCES[4])
+    gsd_w = named(_apply(_ground_plane_kernel, gsd_x, elevation, power=0.25), "m",
+                  "elevation-weighted GSD", references=_GSD_W_REFERENCE)
+    rer5 = named(giqe5_rer(rer_x, rer_y), "1", "GIQE 5 relative edge response",
+                 references=_RER5_REFERENCE)
     versions = xr.DataArray(list(GIQE_VERSIONS), dims="giqe", name="giqe",
                             attrs={"long_name": "GIQE version"})
-
-    def by_version(name):
-        return xr.concat([g[name] for g in (g3, g4, g5)], dim=versions, coords="minimal",
-                         compat="override")
-
+    niirs = _apply(_niirs_by_version_kernel, rer, gsd_x, gsd_y, eho, noise_gain, snr, elevation,
+                   rer_x, rer_y, core=("giqe", len(GIQE_VERSIONS)),
+                   noise_coefficient=noise_coefficient)
     references = "; ".join(f"GIQE {v}: {GIQE_REFERENCES[v]}" for v in GIQE_VERSIONS)
+    niirs = named(niirs.transpose("giqe", ...).assign_coords(giqe=versions), "1",
+                  "National Imagery Interpretability Rating Scale", references=references)
+    tested = (
+        {"snr": snr, "rer": rer, "gsd": gsd, "elevation": elevation, "niirs": niirs},
+        {"snr": snr, "rer": rer, "gsd": gsd_gp, "elevation": elevation, "niirs": niirs},
+        _giqe5_tested(calibration[5], snr=snr, rer=rer5, gsd=gsd_x, gsd_w=gsd_w,
+                      elevation=elevation, q=q, niirs=niirs),
+    )
+    # the dims each version's NIIRS depends on, in the order its equation broadcasts them
+    niirs_dims = ((rer, gsd, eho, noise_gain, snr), (rer, gsd_gp, eho, noise_gain, snr),
+                  (gsd_w, snr, rer5))
     return xr.Dataset({
-        "niirs": named(by_version("niirs"), "1", "National Imagery Interpretability Rating Scale",
-                       references=references),
-        "flags": by_version("flags"),
-        "rer_giqe5": named(g5["rer"], "1", "GIQE 5 relative edge response",
-                           references=g5["rer"].attrs.get("references", "")),
+        "niirs": niirs,
+        "flags": _flags_by_version(calibration, tested, niirs_dims),
+        "rer_giqe5": rer5,
         "gsd": gsd,
-        "gsd_gp": g4["gsd_gp"],
-        "gsd_w": g5["gsd_w"],
-        "noise_gain": named(xr.DataArray(noise_gain), "1", "noise gain of the filter"),
+        "gsd_gp": gsd_gp,
+        "gsd_w": gsd_w,
+        "noise_gain": named(noise_gain, "1", "noise gain of the filter"),
     })
+
+
+def _flags_by_version(calibration, tested, niirs_dims):
+    """The flags of every GIQE version along ``giqe`` from one kernel call.
+
+    ``tested[i]`` holds what version ``GIQE_VERSIONS[i]`` tests (its NIIRS being column i of
+    the ``niirs`` over ``giqe``); the result's dims are in the order in which the versions'
+    tests meet them, ``giqe`` first, as if each version were flagged alone and concatenated.
+    """
+    arrays, tests, order = [], [], []
+    for i, (version, values) in enumerate(zip(GIQE_VERSIONS, tested, strict=True)):
+        version_arrays, version_tests = _version_tests(calibration[version], values, i, i)
+        tests += [(*t[:5], t[5] + len(arrays), t[6]) for t in version_tests]
+        arrays += version_arrays
+        for array, test in zip(version_arrays, version_tests, strict=True):
+            if test[6] is not None:  # this version's NIIRS
+                order += [a.dims for a in niirs_dims[i]]
+            else:  # q's any-orientation test drops orientation
+                core = "orientation" if test[2] == "any_outside" else None
+                order.append([d for d in array.dims if d != core])
+    flags = _label_flags(arrays, tests, versions=len(GIQE_VERSIONS))
+    dims = ("giqe", *_dims_in_order(*order))
+    dims = tuple(d for d in dims if d in flags.dims)
+    return flags if flags.dims == dims else flags.transpose(*dims, ...)
