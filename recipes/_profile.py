@@ -4,7 +4,7 @@ Shared by ``recipes/bench_single.py`` (one scalar ``xbsm.niirs`` call) and
 ``recipes/bench_niirs.py`` (the Olson sweep). The self time of every function is
 attributed to the innermost xbsm module on the call stack (``atmosphere``,
 ``radiometry``, ``noise``, ``quadrature``, ``otf.*``, ``metrics.*``, ``model``,
-``params``, ``geometry``, ``_contract``, ``_metadata``, ``flags``, ...), split into
+``params``, ``geometry``, ``_kernels``, ``_metadata``, ``flags``, ...), split into
 that module's own code with the numpy/scipy it calls directly, and "xarray
 overhead": time spent in xarray (and whatever xarray calls) below that module and
 above any xbsm kernel. cProfile records only caller-callee pairs, so time two or

@@ -10,7 +10,7 @@ The per-scenario ratio is pyBSM's median time per scenario over xbsm's time
 per scenario. Then the sweep (both bands, one ``xbsm.niirs`` call each) runs
 once more per method under cProfile, its time grouped by xbsm stage/module
 (``atmosphere``, ``radiometry``, ``noise``, ``quadrature``, ``otf.*``,
-``metrics.*``, ``model``, ``params``, ``geometry``, ``_contract``,
+``metrics.*``, ``model``, ``params``, ``geometry``, ``_kernels``,
 ``_metadata``, ``flags``) with "xarray overhead" split out, by the rule of
 ``recipes/_profile.py`` (shared with ``bench_single.py``); the microseconds
 per scenario of each stage are its share times the unprofiled median. Writes

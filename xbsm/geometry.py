@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from ._kernels import apply_kernel
 from ._metadata import named
 from .constants import EARTH_RADIUS
 
@@ -109,10 +110,6 @@ def _product_kernel(a, b):
         return a * b
 
 
-def _apply(kernel, *args, n_out=1, **knobs):
-    """``kernel`` over the broadcast of ``args`` (a plain float if every one is a float)."""
-    return xr.apply_ufunc(kernel, *args, kwargs=knobs, output_core_dims=[[]] * n_out,
-                          dask="parallelized", output_dtypes=[float] * n_out)
 
 
 def slant_range(ground_range, sensor_altitude, target_altitude=0.0, *, form="stable"):
@@ -146,9 +143,9 @@ def slant_range(ground_range, sensor_altitude, target_altitude=0.0, *, form="sta
     """
     _check_form(form)
     if form == "law-of-cosines":
-        out = _apply(_slant_range_cosines, target_altitude, sensor_altitude, ground_range)
+        out = apply_kernel(_slant_range_cosines, target_altitude, sensor_altitude, ground_range)
     else:
-        out = _apply(_slant_range_stable, sensor_altitude, target_altitude, ground_range)
+        out = apply_kernel(_slant_range_stable, sensor_altitude, target_altitude, ground_range)
     return named(out, "m", "slant range")
 
 
@@ -197,9 +194,9 @@ def nadir_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="stab
     """
     _check_form(form)
     if form == "law-of-cosines":
-        out = _apply(_nadir_angle_cosines, target_altitude, sensor_altitude, slant_range)
+        out = apply_kernel(_nadir_angle_cosines, target_altitude, sensor_altitude, slant_range)
     else:
-        out = _apply(_nadir_angle_stable, target_altitude, slant_range, sensor_altitude)
+        out = apply_kernel(_nadir_angle_stable, target_altitude, slant_range, sensor_altitude)
     return named(out, "rad", "nadir angle")
 
 
@@ -261,8 +258,8 @@ def altitude_along_path(distance_from_target, slant_range, sensor_altitude, targ
     :math:`\sqrt{a^2 + b^2 - 2ab\cos\phi}`.
     """
     _check_form(form)
-    out = _apply(_altitude_along_path_kernel, sensor_altitude, slant_range, distance_from_target,
-                 target_altitude, form=form)
+    out = apply_kernel(_altitude_along_path_kernel, sensor_altitude, slant_range,
+                       distance_from_target, target_altitude, form=form)
     return named(out, "m", "altitude along the line of sight")
 
 
@@ -281,7 +278,7 @@ def ifov(pixel_pitch, focal_length):
     float or xr.DataArray
         Angular sample spacing. [rad]
     """
-    return named(_apply(_ratio_kernel, pixel_pitch, focal_length), "rad",
+    return named(apply_kernel(_ratio_kernel, pixel_pitch, focal_length), "rad",
                  "instantaneous field of view")
 
 
@@ -300,7 +297,7 @@ def ground_sample_distance(ifov, slant_range):
     float or xr.DataArray
         Ground sample distance. [m]
     """
-    return named(_apply(_product_kernel, ifov, slant_range), "m", "ground sample distance")
+    return named(apply_kernel(_product_kernel, ifov, slant_range), "m", "ground sample distance")
 
 
 def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="stable"):
@@ -331,7 +328,7 @@ def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *,
     .. math:: \epsilon = \operatorname{atan2}\big((a - c) - 2a\sin^2(\theta/2),\ a\sin\theta\big)
     """
     _check_form(form)
-    out = _apply(_target_elevation_kernel, sensor_altitude, target_altitude, slant_range,
+    out = apply_kernel(_target_elevation_kernel, sensor_altitude, target_altitude, slant_range,
                  form=form)
     return named(out, "rad", "elevation angle at the target")
 
@@ -362,13 +359,13 @@ def viewing_geometry(ground_range, altitude, pixel_pitch_x, pixel_pitch_y, focal
     as_da = [x if isinstance(x, xr.DataArray) else xr.DataArray(x)
              for x in (altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length)]
     altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length = as_da
-    slant, angle = _apply(_slant_and_elevation_kernel, altitude, ground_range, n_out=2,
-                          form=form, elevation=elevation)
+    slant, angle = apply_kernel(_slant_and_elevation_kernel, altitude, ground_range,
+                                outputs=((), ()), form=form, elevation=elevation)
     out = {"slant_range": named(slant, "m", "slant range"),
            "elevation_angle": named(angle, "rad", "GIQE elevation angle")}
     for axis, pitch in (("x", pixel_pitch_x), ("y", pixel_pitch_y)):
-        pixel_angle = _apply(_ratio_kernel, pitch, focal_length)
+        pixel_angle = apply_kernel(_ratio_kernel, pitch, focal_length)
         out[f"ifov_{axis}"] = named(pixel_angle, "rad", f"instantaneous field of view along {axis}")
-        out[f"gsd_{axis}"] = named(_apply(_product_kernel, pixel_angle, slant), "m",
+        out[f"gsd_{axis}"] = named(apply_kernel(_product_kernel, pixel_angle, slant), "m",
                                    f"ground sample distance along {axis}")
     return xr.Dataset(out)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from ._kernels import apply_kernel
 from ._metadata import named
 
 # NumPy kernels (plain arrays in and out, no checks); the public functions below wrap them
@@ -73,11 +74,6 @@ def _scene_noise_kernel(target_rate, integration_time, tdi_stages, background_ra
         return np.sqrt(scene_and_path**2 - np.sqrt(path_rate * exposure) ** 2)
 
 
-def _apply(kernel, *args):
-    """``kernel`` over the broadcast of ``args`` (a plain float if every one is a float)."""
-    return xr.apply_ufunc(kernel, *args, dask="parallelized", output_dtypes=[float])
-
-
 def shot_noise(photoelectrons):
     """Photon shot noise of a photoelectron count (Poisson).
 
@@ -91,7 +87,7 @@ def shot_noise(photoelectrons):
     float or xr.DataArray
         [rms electrons]
     """
-    return named(_apply(_shot_noise_kernel, photoelectrons), "count", "shot noise")
+    return named(apply_kernel(_shot_noise_kernel, photoelectrons), "count", "shot noise")
 
 
 def dark_current_noise(dark_current, integration_time, tdi_stages=1.0):
@@ -111,8 +107,8 @@ def dark_current_noise(dark_current, integration_time, tdi_stages=1.0):
     float or xr.DataArray
         [rms electrons]
     """
-    return named(_apply(_dark_current_noise_kernel, tdi_stages, dark_current, integration_time),
-                 "count", "dark current noise")
+    out = apply_kernel(_dark_current_noise_kernel, tdi_stages, dark_current, integration_time)
+    return named(out, "count", "dark current noise")
 
 
 def quantization_noise(well_range, bit_depth):
@@ -136,7 +132,7 @@ def quantization_noise(well_range, bit_depth):
 
     .. math:: \sigma_q = \frac{N_{range}}{\sqrt{12}\,(2^b - 1)}
     """
-    return named(_apply(_quantization_noise_kernel, well_range, bit_depth), "count",
+    return named(apply_kernel(_quantization_noise_kernel, well_range, bit_depth), "count",
                  "quantization noise")
 
 
@@ -178,7 +174,7 @@ def total_noise(shot_variance, quantization, read, other):
     xr.DataArray
         [rms electrons]
     """
-    out = _apply(_total_noise_kernel, shot_variance, quantization, read, other)
+    out = apply_kernel(_total_noise_kernel, shot_variance, quantization, read, other)
     return named(out, "count", "total noise")
 
 
@@ -197,7 +193,7 @@ def stacked_snr(snr, frame_stacks):
     xr.DataArray
         [1]
     """
-    return named(_apply(_stacked_snr_kernel, frame_stacks, snr), "1",
+    return named(apply_kernel(_stacked_snr_kernel, frame_stacks, snr), "1",
                  "contrast signal-to-noise ratio")
 
 
@@ -234,26 +230,28 @@ def noise_terms(signal: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
     contrast = signal["contrast_photoelectrons"]
     rms = "count"
     return xr.Dataset({
-        "snr": named(_apply(_snr_kernel, s["frame_stacks"], contrast, *chain), "1",
+        "snr": named(apply_kernel(_snr_kernel, s["frame_stacks"], contrast, *chain), "1",
                      "contrast signal-to-noise ratio after frame stacking"),
-        "snr_frame": named(_apply(_snr_frame_kernel, contrast, *chain), "1",
+        "snr_frame": named(apply_kernel(_snr_frame_kernel, contrast, *chain), "1",
                            "single-frame contrast signal-to-noise ratio"),
-        "shot_noise": named(_apply(_shot_noise_of_brighter_kernel, target, background), rms,
+        "shot_noise": named(apply_kernel(_shot_noise_of_brighter_kernel, target, background), rms,
                             "shot noise"),
-        "scene_noise": named(_apply(_scene_noise_kernel, signal["target_scene_rate"], time, tdi,
-                                    signal["background_scene_rate"], signal["path_rate"]),
-                             rms, "scene noise"),
-        "path_noise": named(_apply(_rate_noise_kernel, signal["path_rate"], time, tdi), rms,
+        "scene_noise": named(
+            apply_kernel(_scene_noise_kernel, signal["target_scene_rate"], time, tdi,
+                         signal["background_scene_rate"], signal["path_rate"]),
+            rms, "scene noise"),
+        "path_noise": named(apply_kernel(_rate_noise_kernel, signal["path_rate"], time, tdi), rms,
                             "path radiance noise"),
-        "self_emission_noise": named(_apply(_rate_noise_kernel, signal["sensor_rate"], time, tdi),
-                                     rms, "self-emission and stray-light noise"),
+        "self_emission_noise": named(
+            apply_kernel(_rate_noise_kernel, signal["sensor_rate"], time, tdi),
+            rms, "self-emission and stray-light noise"),
         "dark_current_noise": named(
-            _apply(_dark_current_noise_kernel, tdi, s["dark_current"], time), rms,
+            apply_kernel(_dark_current_noise_kernel, tdi, s["dark_current"], time), rms,
             "dark current noise"),
         "quantization_noise": named(
-            _apply(_quantization_noise_kernel, s["max_well"], s["bit_depth"]), rms,
+            apply_kernel(_quantization_noise_kernel, s["max_well"], s["bit_depth"]), rms,
             "quantization noise"),
         "read_noise": named(s["read_noise"], rms, "read noise"),
         "other_noise": named(s["other_noise"], rms, "other noise"),
-        "total_noise": named(_apply(_chain_total_kernel, *chain), rms, "total noise"),
+        "total_noise": named(apply_kernel(_chain_total_kernel, *chain), rms, "total noise"),
     })

@@ -32,6 +32,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from ._kernels import apply_kernel
 from ._metadata import named
 
 __all__ = [
@@ -508,12 +509,9 @@ def _over_band(kernel, wavelength, *args, leading=()):
         return kernel(*front, band, *(a if core else np.asarray(a)[..., np.newaxis]
                                       for a, core in zip(rest, cores, strict=True)))
 
-    return xr.apply_ufunc(
-        on_band, *leading, wavelength, *args,
-        input_core_dims=[[]] * len(leading) + [["wavelength"]]
-        + [["wavelength"] if core else [] for core in cores],
-        dask="parallelized", output_dtypes=[float],
-        dask_gufunc_kwargs={"allow_rechunk": True})
+    return apply_kernel(on_band, *leading, wavelength, *args,
+                        core=[[]] * len(leading) + [["wavelength"]]
+                        + [["wavelength"] if core else [] for core in cores])
 
 
 def optics_cutoff(aperture_diameter, wavelength: xr.DataArray, qe, transmission):

@@ -19,6 +19,7 @@ from types import MappingProxyType
 import numpy as np
 import xarray as xr
 
+from ._kernels import apply_kernel, dataset
 from ._metadata import named
 from .constants import CODATA, Constants
 
@@ -211,18 +212,16 @@ def _apply(kernel, args, *, wavelength=None, curves=(), spectral=(True,), **knob
     Returns
     -------
     xr.DataArray, float or tuple of them
-        Without attributes; inputs backed by dask give lazy dask results.
+        With the attributes of the first argument (callers name their results); inputs
+        backed by dask give lazy dask results.
     """
     curve_dims = {i: f"{name}_wavelength" for i, name in curves
                   if f"{name}_wavelength" in getattr(args[i], "dims", ())}
     core = [[curve_dims[i]] if i in curve_dims
             else ["wavelength"] if "wavelength" in getattr(a, "dims", ()) else []
             for i, a in enumerate(args)]
-    common = {"kwargs": knobs, "join": _join(args), "dask": "parallelized",
-              "output_dtypes": [float] * len(spectral)}
     if wavelength is None or not any(core):
-        out = xr.apply_ufunc(kernel, *args, output_core_dims=[[]] * len(spectral), **common)
-        return out
+        return apply_kernel(kernel, *args, outputs=[()] * len(spectral), **knobs)
     sources = {i: args[i][dim].values for i, dim in curve_dims.items()}
 
     def over_wavelength(*arrays):
@@ -231,38 +230,13 @@ def _apply(kernel, args, *, wavelength=None, curves=(), spectral=(True,), **knob
                         else a if core[i] else np.asarray(a)[..., np.newaxis]
                         for i, a in enumerate(arrays)), **knobs)
 
-    common["kwargs"] = {}
-    out = xr.apply_ufunc(
-        over_wavelength, *args, wavelength,
-        input_core_dims=[*core, ["wavelength"]],
-        output_core_dims=[["wavelength"] if s else [] for s in spectral],
-        dask_gufunc_kwargs={"allow_rechunk": True}, **common)
+    out = apply_kernel(over_wavelength, *args, wavelength, core=[*core, ["wavelength"]],
+                       outputs=[("wavelength",) if s else () for s in spectral])
     order = _dimension_order(args, curve_dims)
     outs = tuple(o.transpose(*order) if s and o.dims != order else o
                  for o, s in zip(out if isinstance(out, tuple) else (out,), spectral,
                                  strict=True))
     return outs if len(outs) > 1 else outs[0]
-
-
-def _join(objects, otherwise: str = "inner") -> str:
-    """How to align ``objects``: as xarray would (``otherwise``), without its copies.
-
-    When the objects' indexes already agree, an inner or outer join changes nothing
-    but copies every object; "exact" then gives the same result without the copies.
-    """
-    seen = {}
-    for a in objects:
-        for dim, index in getattr(a, "xindexes", {}).items():
-            first = seen.setdefault(dim, index)
-            if first is not index and not first.equals(index):
-                return otherwise
-    return "exact"
-
-
-def _dataset(variables: dict) -> xr.Dataset:
-    """``xr.Dataset(variables)``, without copying variables whose indexes already agree."""
-    return xr.merge([variables], join=_join(variables.values(), "outer"),
-                    compat="broadcast_equals", combine_attrs="override")
 
 
 def _dimension_order(args, curve_dims):
@@ -716,7 +690,7 @@ def sensor_band_terms(sensor: xr.Dataset, wavelength: xr.DataArray,
         s["cold_filter_transmission"], s["optics_emissivity"], s["optics_temperature"],
         s["cold_filter_emissivity"], s["cold_filter_temperature"], s["stray_irradiance"]),
         wavelength=wavelength, curves=[(9, "stray_irradiance")], **_planck_knobs(constants))
-    return _dataset({
+    return dataset({
         "optics_transmission": named(optics, "1", "optics transmission on the band"),
         "quantum_efficiency": named(
             resample_spectral(s["quantum_efficiency"], wavelength, "quantum_efficiency"),
@@ -798,7 +772,7 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
         wavelength=wavelength, spectral=(False,), **knobs)
     own = _apply(_rate_kernel, (*detector[:4], band["sensor_irradiance"]),
                  wavelength=wavelength, spectral=(False,), **knobs)
-    return _dataset({
+    return dataset({
         **{name: named(value, units, long_name) for value, (name, units, long_name) in zip(
             counts, _COUNT_TERMS, strict=True)},
         "spectral_weights": named(spectral, "s-1 m-1", "target spectral photoelectron rate"),

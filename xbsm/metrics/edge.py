@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._kernels import apply_kernel
 from .._metadata import named
 
 __all__ = [
@@ -123,12 +124,10 @@ def _apply_edge(kernel, otf_slice, weights, *args, n_out=1, **knobs):
         weights["frequency"])
     dtype = np.result_type(np.finfo(otf_slice.dtype).dtype, weights.dtype,
                            *(np.asarray(a).dtype for a in args))
-    return xr.apply_ufunc(
+    return apply_kernel(
         kernel, otf_slice.reset_coords(drop=True), weights.reset_coords(drop=True),
-        abscissa.variable, *args, kwargs=knobs,
-        input_core_dims=[["frequency"]] * 3 + [[]] * len(args),
-        output_core_dims=[[]] * n_out, dask="parallelized", output_dtypes=[dtype] * n_out,
-        dask_gufunc_kwargs={"allow_rechunk": True})
+        abscissa.variable, *args, core=[["frequency"]] * 3 + [[]] * len(args),
+        outputs=[()] * n_out, dtype=dtype, **knobs)
 
 
 def edge_response(otf_slice, ifov, position, weights):

@@ -20,6 +20,7 @@ import xarray as xr
 
 from xbsm import flags as _flags
 
+from .._kernels import apply_kernel
 from .._metadata import named
 
 __all__ = [
@@ -376,15 +377,6 @@ def _flags_kernel(*arrays, tests, versions):
 # ---------------------------------------------------------------- the xarray layer
 
 
-def _apply(kernel, *args, core=None, **knobs):
-    """``kernel`` over the broadcast of the DataArrays ``args``: one float result (dask-parallel).
-
-    ``core`` names a new last dimension of the result and its length (e.g. ``("giqe", 3)``).
-    """
-    dtype = np.result_type(*(a.dtype for a in args), np.float32)  # as NumPy's arithmetic gives
-    return xr.apply_ufunc(kernel, *args, kwargs=knobs, output_core_dims=[[core[0]] if core else []],
-                          dask="parallelized", output_dtypes=[dtype],
-                          dask_gufunc_kwargs={"output_sizes": dict([core]) if core else {}})
 
 
 def _dims_in_order(*dims):
@@ -429,12 +421,9 @@ def _label_flags(arrays, tests, versions=None, long_name="GIQE validity flags"):
     for _, _, kind, _, _, index, column in tests:
         core[index] = (["orientation"] if kind == "any_outside"
                        else ["giqe"] if column is not None else [])
-    out = xr.apply_ufunc(
-        _flags_kernel, *unique, kwargs={"tests": tests, "versions": versions},
-        input_core_dims=core, output_core_dims=[["giqe"] if versions else []],
-        dask="parallelized", output_dtypes=[np.int32],
-        dask_gufunc_kwargs={"allow_rechunk": True,
-                            "output_sizes": {"giqe": versions} if versions else {}})
+    out = apply_kernel(_flags_kernel, *unique, core=core, outputs=[("giqe",) if versions else ()],
+                       sizes={"giqe": versions} if versions else None, dtype=np.int32,
+                       tests=tests, versions=versions)
     out.attrs = _flags.flag_attrs(long_name)
     return out
 
@@ -462,7 +451,7 @@ def sampling_q(wavelength, aperture_diameter, ifov):
 
     NGA GIQE 5 report (2015), which assumes 1 <= Q <= 2.
     """
-    q = _apply(_sampling_q_kernel, _da(wavelength), _da(aperture_diameter), _da(ifov))
+    q = apply_kernel(_sampling_q_kernel, _da(wavelength), _da(aperture_diameter), _da(ifov))
     return named(q, "1", "sampling ratio Q = lambda N / p")
 
 
@@ -547,8 +536,8 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
     """
     _check_calibration(calibration)
     rer, gsd, eho, snr, noise_gain = map(_da, (rer, gsd, eho, snr, noise_gain))
-    niirs = named(_apply(_giqe3_kernel, rer, gsd, eho, noise_gain, snr), "1", "NIIRS (GIQE 3)",
-                  references=GIQE_REFERENCES[3])
+    niirs = named(apply_kernel(_giqe3_kernel, rer, gsd, eho, noise_gain, snr), "1",
+                  "NIIRS (GIQE 3)", references=GIQE_REFERENCES[3])
     values = {"snr": snr, "rer": rer, "gsd": gsd, "niirs": niirs,
               "elevation": None if elevation is None else _da(elevation)}
     return xr.Dataset({"niirs": niirs, "flags": _label_flags(*_version_tests(calibration, values))})
@@ -612,9 +601,9 @@ def giqe4(
     rer, gsd, eho, snr, elevation, noise_gain = map(
         _da, (rer, gsd, eho, snr, elevation, noise_gain)
     )
-    gsd_gp = named(_apply(_ground_plane_kernel, gsd, elevation, power=0.5), "m",
+    gsd_gp = named(apply_kernel(_ground_plane_kernel, gsd, elevation, power=0.5), "m",
                    "ground-plane geometric-mean GSD", references=GIQE_REFERENCES[4])
-    niirs = named(_apply(_giqe4_kernel, rer, gsd, elevation, eho, noise_gain, snr,
+    niirs = named(apply_kernel(_giqe4_kernel, rer, gsd, elevation, eho, noise_gain, snr,
                          noise_coefficient=noise_coefficient),
                   "1", "NIIRS (GIQE 4)", references=GIQE_REFERENCES[4])
     values = {"snr": snr, "rer": rer, "gsd": gsd_gp, "elevation": elevation, "niirs": niirs}
@@ -641,7 +630,7 @@ def giqe5_rer(rer_x, rer_y):
 
     .. math:: RER = \left(\max(R_x, R_y)\,\min(R_x, R_y)^2\right)^{1/3}
     """
-    out = _apply(_giqe5_rer_kernel, _da(rer_x), _da(rer_y))
+    out = apply_kernel(_giqe5_rer_kernel, _da(rer_x), _da(rer_y))
     return named(out, "1", "GIQE 5 weighted relative edge response",
                  references=_RER5_REFERENCE)
 
@@ -689,10 +678,10 @@ def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q
     _check_calibration(calibration)
     rer_x, rer_y, gsd, snr, elevation = map(_da, (rer_x, rer_y, gsd, snr, elevation))
     rer = giqe5_rer(rer_x, rer_y)
-    gsd_w = named(_apply(_ground_plane_kernel, gsd, elevation, power=0.25), "m",
+    gsd_w = named(apply_kernel(_ground_plane_kernel, gsd, elevation, power=0.25), "m",
                   "elevation-weighted GSD", references=_GSD_W_REFERENCE)
-    niirs = named(_apply(_giqe5_kernel, gsd, elevation, snr, rer_x, rer_y), "1", "NIIRS (GIQE 5)",
-                  references=GIQE_REFERENCES[5])
+    niirs = named(apply_kernel(_giqe5_kernel, gsd, elevation, snr, rer_x, rer_y), "1",
+                  "NIIRS (GIQE 5)", references=GIQE_REFERENCES[5])
     fl = _label_flags(*_version_tests(calibration, _giqe5_tested(
         calibration, snr=snr, rer=rer, gsd=gsd, gsd_w=gsd_w, elevation=elevation, q=q,
         niirs=niirs)))
@@ -703,7 +692,7 @@ def _giqe5_tested(calibration, *, snr, rer, gsd, gsd_w, elevation, q, niirs):
     """What GIQE 5's flags test: its RER, gsd_w and the ground-plane GSD of ``gsd``."""
     gsd_gp = None
     if calibration.gsd_ground_plane is not None:  # GSD / sqrt(sin(elevation))
-        gsd_gp = _apply(_ground_plane_kernel, gsd, elevation, power=0.5)
+        gsd_gp = apply_kernel(_ground_plane_kernel, gsd, elevation, power=0.5)
     return {"snr": snr, "rer": rer, "gsd": gsd_w, "gsd_ground_plane": gsd_gp,
             "elevation": elevation, "q": None if q is None else _da(q), "niirs": niirs}
 
@@ -746,19 +735,19 @@ def giqe_by_version(*, rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noi
     """
     rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain = map(
         _da, (rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain))
-    gsd = named(_apply(_geometric_mean_kernel, gsd_x, gsd_y), "m",
+    gsd = named(apply_kernel(_geometric_mean_kernel, gsd_x, gsd_y), "m",
                 "ground sample distance (geometric mean)")
-    gsd_gp = named(_apply(_ground_plane_kernel, gsd, elevation, power=0.5), "m",
+    gsd_gp = named(apply_kernel(_ground_plane_kernel, gsd, elevation, power=0.5), "m",
                    "ground-plane geometric-mean GSD", references=GIQE_REFERENCES[4])
-    gsd_w = named(_apply(_ground_plane_kernel, gsd_x, elevation, power=0.25), "m",
+    gsd_w = named(apply_kernel(_ground_plane_kernel, gsd_x, elevation, power=0.25), "m",
                   "elevation-weighted GSD", references=_GSD_W_REFERENCE)
     rer5 = named(giqe5_rer(rer_x, rer_y), "1", "GIQE 5 relative edge response",
                  references=_RER5_REFERENCE)
     versions = xr.DataArray(list(GIQE_VERSIONS), dims="giqe", name="giqe",
                             attrs={"long_name": "GIQE version"})
-    niirs = _apply(_niirs_by_version_kernel, rer, gsd_x, gsd_y, eho, noise_gain, snr, elevation,
-                   rer_x, rer_y, core=("giqe", len(GIQE_VERSIONS)),
-                   noise_coefficient=noise_coefficient)
+    niirs = apply_kernel(_niirs_by_version_kernel, rer, gsd_x, gsd_y, eho, noise_gain, snr,
+                         elevation, rer_x, rer_y, outputs=[("giqe",)],
+                         sizes={"giqe": len(GIQE_VERSIONS)}, noise_coefficient=noise_coefficient)
     references = "; ".join(f"GIQE {v}: {GIQE_REFERENCES[v]}" for v in GIQE_VERSIONS)
     niirs = named(niirs.transpose("giqe", ...).assign_coords(giqe=versions), "1",
                   "National Imagery Interpretability Rating Scale", references=references)

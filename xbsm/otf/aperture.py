@@ -6,8 +6,9 @@ import numpy as np
 import xarray as xr
 from scipy.special import jv
 
+from .._kernels import apply_kernel
 from .._metadata import described
-from .spectral import _finite, _labelled, _positive, _require
+from .spectral import _finite, _positive, _require
 
 __all__ = ["circular_aperture", "defocused_aperture", "defocus_wavefront_coefficient"]
 
@@ -65,7 +66,7 @@ def circular_aperture(fx, fy, wavelength, aperture_diameter, obscuration_ratio=0
     _positive("wavelength", wavelength)
     _positive("aperture_diameter", aperture_diameter)
     _require("obscuration_ratio", obscuration_ratio, lambda a: (a >= 0) & (a < 1), "in [0, 1)")
-    out = _labelled(_circular_aperture_xy_kernel, fx, fy, aperture_diameter, wavelength,
+    out = apply_kernel(_circular_aperture_xy_kernel, fx, fy, aperture_diameter, wavelength,
                     obscuration_ratio)
     return described(out, circular_aperture)
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._kernels import apply_kernel
 from .._metadata import described
-from .spectral import _labelled, _positive, _require
+from .spectral import _positive, _require
 
 __all__ = ["detector", "aggregated_detector", "charge_transfer", "diffusion"]
 
@@ -37,7 +38,7 @@ def detector(fx, fy, detector_width_x, detector_width_y, focal_length):
     _positive("detector_width_x", detector_width_x)
     _positive("detector_width_y", detector_width_y)
     _positive("focal_length", focal_length)
-    out = _labelled(_detector_kernel, detector_width_x, focal_length, fx, detector_width_y, fy)
+    out = apply_kernel(_detector_kernel, detector_width_x, focal_length, fx, detector_width_y, fy)
     return described(out, detector)
 
 
@@ -105,7 +106,7 @@ def aggregated_detector(
     _positive("detector_width_x", detector_width_x)
     _positive("detector_width_y", detector_width_y)
     _positive("focal_length", focal_length)
-    out = _labelled(_aggregated_detector_kernel, pixel_pitch_x, fx, focal_length, pixel_pitch_y,
+    out = apply_kernel(_aggregated_detector_kernel, pixel_pitch_x, fx, focal_length, pixel_pitch_y,
                     fy, detector_width_x, detector_width_y, aggregation=int(aggregation))
     return described(out, aggregated_detector)
 
@@ -166,7 +167,7 @@ def charge_transfer(
     _require("transfers_y", transfers_y, lambda a: a >= 0, ">= 0")
     _require("transfer_efficiency", transfer_efficiency, lambda a: (a >= 0) & (a <= 1), "in [0, 1]")
     _positive("phases", phases)
-    out = _labelled(_charge_transfer_kernel, phases, transfer_efficiency, transfers_x,
+    out = apply_kernel(_charge_transfer_kernel, phases, transfer_efficiency, transfers_x,
                     pixel_pitch_x, fx, focal_length, transfers_y, pixel_pitch_y, fy)
     return described(out, charge_transfer)
 
@@ -221,7 +222,7 @@ def diffusion(fx, fy, absorption_coefficient, depletion_width, diffusion_length,
     _require("depletion_width", depletion_width, lambda a: a >= 0, ">= 0")
     _positive("diffusion_length", diffusion_length)
     _positive("focal_length", focal_length)
-    out = _labelled(_diffusion_kernel, absorption_coefficient, depletion_width, diffusion_length,
+    out = apply_kernel(_diffusion_kernel, absorption_coefficient, depletion_width, diffusion_length,
                     fx, fy, focal_length)
     return described(out, diffusion)
 

@@ -7,8 +7,9 @@ import xarray as xr
 from scipy import fft as sp_fft
 from scipy.interpolate import RegularGridInterpolator
 
+from .._kernels import apply_kernel
 from .._metadata import described
-from .spectral import _labelled, _nonnegative, _positive
+from .spectral import _nonnegative, _positive
 
 __all__ = ["gaussian", "sharpening_filter", "FILTER_METHODS"]
 
@@ -44,7 +45,7 @@ def gaussian(fx, fy, blur_size_x, blur_size_y):
     """
     _nonnegative("blur_size_x", blur_size_x)
     _nonnegative("blur_size_y", blur_size_y)
-    out = _labelled(_gaussian_kernel, fx, blur_size_x, fy, blur_size_y)
+    out = apply_kernel(_gaussian_kernel, fx, blur_size_x, fy, blur_size_y)
     return described(out, gaussian)
 
 
@@ -133,11 +134,11 @@ def sharpening_filter(fx, fy, kernel, ifov_x, ifov_y=None, method="dtft"):
     if method == "pybsm":
         if isinstance(ifov_x, xr.DataArray):
             raise ValueError("ifov_x must be a float for method='pybsm'")
-        out = _labelled(_pybsm_filter_kernel, fx, fy, kernel=k, ifov=float(ifov_x))
+        out = apply_kernel(_pybsm_filter_kernel, fx, fy, kernel=k, ifov=float(ifov_x))
         return described(out, sharpening_filter)
     if ifov_y is None:
         ifov_y = ifov_x
-    out = _labelled(_dtft_filter_kernel, fy, ifov_y, fx, ifov_x, kernel=k, dtype=complex)
+    out = apply_kernel(_dtft_filter_kernel, fy, ifov_y, fx, ifov_x, kernel=k, dtype=complex)
     return described(out, sharpening_filter)
 
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._kernels import apply_kernel
 from .._metadata import described
-from .spectral import _finite, _labelled, _nonnegative, _positive, _require
+from .spectral import _finite, _nonnegative, _positive, _require
 
 __all__ = ["jitter", "drift", "tdi"]
 
@@ -34,7 +35,7 @@ def jitter(fx, fy, jitter_rms_x, jitter_rms_y):
     """
     _nonnegative("jitter_rms_x", jitter_rms_x)
     _nonnegative("jitter_rms_y", jitter_rms_y)
-    out = _labelled(_jitter_kernel, jitter_rms_x, fx, jitter_rms_y, fy)
+    out = apply_kernel(_jitter_kernel, jitter_rms_x, fx, jitter_rms_y, fy)
     return described(out, jitter)
 
 
@@ -68,7 +69,7 @@ def drift(fx, fy, drift_x, drift_y):
     """
     _finite("drift_x", drift_x)
     _finite("drift_y", drift_y)
-    out = _labelled(_drift_kernel, drift_x, fx, drift_y, fy)
+    out = apply_kernel(_drift_kernel, drift_x, fx, drift_y, fy)
     return described(out, drift)
 
 
@@ -128,7 +129,7 @@ def tdi(frequency, detector_width, focal_length, stages, rate_ratio, phases=1):
         lambda a: (a >= 1) & (a == np.round(a)),
         "such that stages * phases is a positive integer",
     )
-    out = _labelled(_tdi_kernel, detector_width, frequency, focal_length, rate_ratio, stages,
+    out = apply_kernel(_tdi_kernel, detector_width, frequency, focal_length, rate_ratio, stages,
                     phases, dtype=complex)
     return described(out, tdi)
 

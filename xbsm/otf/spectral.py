@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._kernels import apply_kernel
 from .._metadata import described
 
 __all__ = ["spectral_average"]
@@ -56,29 +57,14 @@ def _finite(name: str, value) -> None:
     _require(name, value, np.isfinite, "finite")
 
 
-def _labelled(func, *args, dtype=float, **knobs):
-    """The numpy kernel ``func`` on the data of ``args``, broadcast and labelled by xarray.
-
-    The one xarray operation of a public OTF function: the arguments align and
-    broadcast, ``func`` runs once on plain arrays (block by block for dask,
-    lazily), and the result carries the union of the arguments' dims in order of
-    appearance and the coordinates (with their attributes) that arithmetic would
-    give. ``knobs`` are plain keyword arguments of the kernel.
-    """
-    return xr.apply_ufunc(func, *args, kwargs=knobs, dask="parallelized",
-                          output_dtypes=[dtype], keep_attrs="override")
-
-
 def _spectral(func, *args, spectral: int = 2, dtype=float, **knobs):
-    """:func:`_labelled` for a kernel ``func`` whose last ``spectral`` arguments are spectral.
+    """``apply_kernel`` for a kernel ``func`` whose last ``spectral`` arguments are spectral.
 
     Those arguments reach the kernel with ``wavelength`` as their last axis, which
     the kernel reduces; ``wavelength`` is one dask chunk inside the kernel.
     """
     core = [[]] * (len(args) - spectral) + [["wavelength"]] * spectral
-    return xr.apply_ufunc(func, *args, kwargs=knobs, input_core_dims=core,
-                          dask="parallelized", output_dtypes=[dtype], keep_attrs="override",
-                          dask_gufunc_kwargs={"allow_rechunk": True})
+    return apply_kernel(func, *args, core=core, dtype=dtype, **knobs)
 
 
 def _weighted_sum_kernel(otf, weights):
@@ -123,9 +109,6 @@ def spectral_average(otf, weights, dim: str = "wavelength"):
         raise ValueError(f"otf must have dimension {dim!r}; it has {otf.dims}")
     _nonnegative("weights", weights)
     _require("weights", weights.sum(dim), lambda a: a > 0, f"not all zero along {dim!r}")
-    out = xr.apply_ufunc(
-        _weighted_sum_kernel, otf, weights, input_core_dims=[[dim], [dim]],
-        dask="parallelized", output_dtypes=[np.result_type(otf.dtype, weights.dtype)],
-        dask_gufunc_kwargs={"allow_rechunk": True}, keep_attrs="override",
-    )
+    out = apply_kernel(_weighted_sum_kernel, otf, weights, core=[[dim], [dim]],
+                       dtype=np.result_type(otf.dtype, weights.dtype))
     return described(out, spectral_average)

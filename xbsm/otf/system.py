@@ -17,12 +17,13 @@ import math
 import numpy as np
 import xarray as xr
 
+from .._kernels import apply_kernel
 from .._metadata import named
 from ..methods import Method
 from . import aperture, filters, motion, turbulence, wavefront
 from .detector import _detector_kernel
 from .motion import _jitter_kernel
-from .spectral import _labelled, _spectral
+from .spectral import _spectral
 
 ORIENTATION = xr.DataArray(["x", "y"], dims="orientation", name="orientation")
 """The two slice directions the GIQE uses: along x (fx = f) and along y (fy = f)."""
@@ -133,10 +134,10 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
         "aperture": _spectral(_aperture_band_kernel, radial, s["aperture_diameter"],
                               s["obscuration_ratio"], wl, w),
         "turbulence": None,
-        "detector": _labelled(_detector_kernel, s["detector_width_x"], s["focal_length"], fx,
+        "detector": apply_kernel(_detector_kernel, s["detector_width_x"], s["focal_length"], fx,
                               s["detector_width_y"], fy_),
-        "jitter": _labelled(_jitter_kernel, s["jitter_x"], fx, s["jitter_y"], fy_),
-        "drift": _labelled(_exposure_drift_kernel, s["drift_rate_x"], integration_time,
+        "jitter": apply_kernel(_jitter_kernel, s["jitter_x"], fx, s["jitter_y"], fy_),
+        "drift": apply_kernel(_exposure_drift_kernel, s["drift_rate_x"], integration_time,
                            s["tdi_stages"], fx, s["drift_rate_y"], fy_),
         "wavefront": _spectral(_wavefront_band_kernel, s["wavefront_variance"],
                                s["wavefront_wavelength"], fx, s["wavefront_correlation_length_x"],
@@ -144,9 +145,9 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
     }
     parts["turbulence"], r0_band = _turbulence(s, sc, radial, wl, w, integration_time,
                                                slant_range, method)
-    unfiltered = _labelled(_product_kernel, *parts.values())
+    unfiltered = apply_kernel(_product_kernel, *parts.values())
     fil = _filter(s, fx, fy_, method)
-    system = _labelled(np.multiply, unfiltered, fil,
+    system = apply_kernel(np.multiply, unfiltered, fil,
                        dtype=np.result_type(unfiltered.dtype, fil.dtype))
     out = xr.Dataset({**{name: _otf(part, f"{name} OTF") for name, part in parts.items()},
                       "filter": _otf(fil, "post-processing filter OTF")})
@@ -168,7 +169,7 @@ def _turbulence(s, sc, radial, wl, w, integration_time, slant_range, method: Met
     Scenarios without turbulence (``cn2_at_1m`` = 0) get an OTF of 1 and an infinite r0.
     """
     cn2 = sc["cn2_at_1m"]
-    r0_ref = _labelled(_turbulent_path_kernel, sc["high_altitude_wind_speed"], slant_range,
+    r0_ref = apply_kernel(_turbulent_path_kernel, sc["high_altitude_wind_speed"], slant_range,
                        sc["altitude"], cn2,
                        nodes=turbulence._path_nodes(method.turbulence_path_samples,
                                                     method.turbulence_path_rule),
@@ -248,7 +249,7 @@ def _filter(sensor, fx, fy, method: Method):
     # pyBSM 0.16.1 skips kernels with a single row (common_OTFs: shape[0] > 1)
     pybsm_skips = method.filter_otf == "pybsm" and kernel.sizes["kernel_y"] == 1
     if identity or pybsm_skips:
-        return _labelled(_ones_kernel, fx, fy)
+        return apply_kernel(_ones_kernel, fx, fy)
     k = np.asarray(kernel.values, dtype=float)
     pitch_x, pitch_y, focal = (sensor[n] for n in ("pixel_pitch_x", "pixel_pitch_y",
                                                    "focal_length"))
@@ -258,7 +259,7 @@ def _filter(sensor, fx, fy, method: Method):
                 "method filter_otf='pybsm' cannot sweep pixel_pitch_x or focal_length "
                 "with a filter kernel; use filter_otf='dtft'"
             )
-        return _labelled(filters._pybsm_filter_kernel, fx, fy, kernel=k,
+        return apply_kernel(filters._pybsm_filter_kernel, fx, fy, kernel=k,
                          ifov=float(pitch_x) / float(focal))
-    return _labelled(_sampled_filter_kernel, fy, pitch_y, focal, fx, pitch_x, kernel=k,
+    return apply_kernel(_sampled_filter_kernel, fy, pitch_y, focal, fx, pitch_x, kernel=k,
                      dtype=complex)

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._kernels import apply_kernel
 from .._metadata import described
 from ..geometry import altitude_along_path
 from .spectral import (
-    _labelled,
     _nonnegative,
     _positive,
     _require,
@@ -59,7 +59,7 @@ def hufnagel_valley(altitude, high_altitude_wind_speed=21.0, cn2_at_1m=1.7e-14):
               + 2.7\times10^{-16} e^{-h/1500} + C_n^2(1\,\mathrm{m})\, e^{-h/100}
     """
     _nonnegative("cn2_at_1m", cn2_at_1m)
-    out = _labelled(_hufnagel_valley_kernel, high_altitude_wind_speed, altitude, cn2_at_1m)
+    out = apply_kernel(_hufnagel_valley_kernel, high_altitude_wind_speed, altitude, cn2_at_1m)
     return described(out, hufnagel_valley, units="m-2/3")
 
 
@@ -193,7 +193,7 @@ def slant_path_coherence_diameter(
     _positive("slant_range", slant_range)
     _positive("cn2_at_1m", cn2_at_1m)
     _positive("wavelength", wavelength)
-    out = _labelled(_slant_path_kernel, wavelength, high_altitude_wind_speed, slant_range,
+    out = apply_kernel(_slant_path_kernel, wavelength, high_altitude_wind_speed, slant_range,
                     sensor_altitude, target_altitude, cn2_at_1m,
                     nodes=_path_nodes(int(path_samples), rule), form=geometry_form)
     return described(out, slant_path_coherence_diameter, units="m")
@@ -249,7 +249,7 @@ def scale_coherence_diameter(
     _positive("coherence_diameter", coherence_diameter)
     _positive("wavelength", wavelength)
     _positive("reference_wavelength", reference_wavelength)
-    out = _labelled(_scale_kernel, coherence_diameter, wavelength, reference_wavelength)
+    out = apply_kernel(_scale_kernel, coherence_diameter, wavelength, reference_wavelength)
     return described(out, scale_coherence_diameter, units="m")
 
 
@@ -342,7 +342,7 @@ def turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, exposu
     _require(
         "exposure_coefficient", exposure_coefficient, lambda a: (a >= 0) & (a <= 1), "in [0, 1]"
     )
-    out = _labelled(_turbulence_xy_kernel, wavelength, coherence_diameter, fx, fy,
+    out = apply_kernel(_turbulence_xy_kernel, wavelength, coherence_diameter, fx, fy,
                     exposure_coefficient, aperture_diameter)
     return described(out, turbulence)
 
@@ -401,7 +401,7 @@ def wind_blended_turbulence(
     _positive("coherence_diameter", coherence_diameter)
     _nonnegative("integration_time", integration_time)
     _nonnegative("wind_speed", wind_speed)
-    out = _labelled(_wind_blended_xy_kernel, wind_speed, integration_time, coherence_diameter,
+    out = apply_kernel(_wind_blended_xy_kernel, wind_speed, integration_time, coherence_diameter,
                     wavelength, fx, fy, aperture_diameter)
     return described(out, wind_blended_turbulence)
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._kernels import apply_kernel
 from .._metadata import described
-from .spectral import _labelled, _nonnegative, _positive, _require
+from .spectral import _nonnegative, _positive, _require
 
 __all__ = ["random_phase_wavefront", "shannon_wavefront"]
 
@@ -59,7 +60,7 @@ def random_phase_wavefront(
     _positive("phase_variance_wavelength", phase_variance_wavelength)
     # the variance at its own wavelength: (lambda / lambda)^2 = 1 exactly
     reference = wavelength if phase_variance_wavelength is None else phase_variance_wavelength
-    out = _labelled(_random_phase_kernel, phase_variance, reference, wavelength, fx,
+    out = apply_kernel(_random_phase_kernel, phase_variance, reference, wavelength, fx,
                     correlation_length_x, fy, correlation_length_y)
     return described(out, random_phase_wavefront)
 
@@ -119,6 +120,6 @@ def shannon_wavefront(fx, fy, wavelength, aperture_diameter, rms_wavefront_error
     _require(
         "rms_wavefront_error", rms_wavefront_error, lambda a: (a >= 0) & (a <= 0.18), "in [0, 0.18]"
     )
-    out = _labelled(_shannon_kernel, rms_wavefront_error, fx, fy, wavelength, aperture_diameter,
+    out = apply_kernel(_shannon_kernel, rms_wavefront_error, fx, fy, wavelength, aperture_diameter,
                     clip=bool(clip))
     return described(out, shannon_wavefront)
