@@ -38,9 +38,19 @@ def join_for(objects, otherwise: str = "inner") -> str:
 
 
 def dataset(variables: dict) -> xr.Dataset:
-    """``xr.Dataset(variables)``, without copying variables whose indexes already agree."""
-    return xr.merge([variables], join=join_for(variables.values(), "outer"),
-                    compat="broadcast_equals", combine_attrs="override")
+    """``xr.Dataset(variables)``, without aligning DataArrays that already share coordinates.
+
+    The variables of one stage come from the same inputs, so their coordinates agree;
+    the Dataset is then built from their Variables and the coordinates (with their
+    indexes and attributes) they carry. Any disagreement, which xarray would align or
+    merge, takes xarray's own path.
+    """
+    arrays = [v for v in variables.values() if isinstance(v, xr.DataArray)]
+    coords = _merged_coords(arrays, set()) if len(arrays) == len(variables) else None
+    if coords is None or join_for(arrays) != "exact" or not coords[0].keys().isdisjoint(variables):
+        return xr.Dataset(variables)
+    return xr.Dataset({name: v.variable for name, v in variables.items()},
+                      coords=xr.Coordinates(*coords))
 
 
 def apply_kernel(kernel, /, *args, core=None, outputs=((),), sizes=None, dtype=float, **knobs):
@@ -170,8 +180,11 @@ def _merged_coords(arrays, dropped):
             if dropped.intersection(coord.dims):
                 continue
             known = variables.setdefault(name, coord)
-            if known is not coord and not known.equals(coord):
-                return None
+            if known is not coord:
+                if not known.equals(coord):
+                    return None
+                if not known.attrs:  # the coordinate as described where it is
+                    variables[name] = coord
             if name in own:
                 indexes.setdefault(name, own[name])
     return variables, indexes

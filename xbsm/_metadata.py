@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import xarray as xr
 
+from ._kernels import dataset
+
 
 def named(out, units: str, long_name: str, **extra):
     """``out`` with exactly the CF ``units``, ``long_name`` and ``extra`` attributes.
@@ -62,24 +64,7 @@ def result(variables: dict, method, **attrs) -> xr.Dataset:
     """
     dims = {d for v in variables.values() for d in v.dims}
     attrs = {"method": method.describe(), **attrs}
-    ds = _assemble({k: v for k, v in variables.items() if k not in dims})
+    ds = dataset({k: v for k, v in variables.items() if k not in dims})
     ds.attrs = attrs
     return ds.drop_vars([c for c in ds.coords if ds[c].ndim == 0 and c not in ds.dims])
 
-
-def _assemble(arrays: dict) -> xr.Dataset:
-    """``xr.Dataset(arrays)``, without aligning DataArrays that already share their coordinates.
-
-    The variables of one result come from the same inputs, so their coordinates agree;
-    building the Dataset from their Variables skips an alignment per variable. Any
-    disagreement (which xarray would align) takes xarray's own path.
-    """
-    coords = {}
-    for array in arrays.values():
-        for name, coord in array.coords.variables.items():
-            if coord.ndim == 0:
-                continue
-            known = coords.setdefault(name, coord)
-            if known is not coord and not known.equals(coord):
-                return xr.Dataset(arrays)
-    return xr.Dataset({k: v.variable for k, v in arrays.items()}, coords=coords)

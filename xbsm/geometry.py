@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ._kernels import apply_kernel
+from ._kernels import apply_kernel, dataset
 from ._metadata import named
 from .constants import EARTH_RADIUS
 
@@ -368,4 +368,4 @@ def viewing_geometry(ground_range, altitude, pixel_pitch_x, pixel_pitch_y, focal
         out[f"ifov_{axis}"] = named(pixel_angle, "rad", f"instantaneous field of view along {axis}")
         out[f"gsd_{axis}"] = named(apply_kernel(_product_kernel, pixel_angle, slant), "m",
                                    f"ground sample distance along {axis}")
-    return xr.Dataset(out)
+    return dataset(out)

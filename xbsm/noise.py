@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ._kernels import apply_kernel
+from ._kernels import apply_kernel, dataset
 from ._metadata import named
 
 # NumPy kernels (plain arrays in and out, no checks); the public functions below wrap them
@@ -229,7 +229,7 @@ def noise_terms(signal: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
     chain = (target, background, s["max_well"], s["bit_depth"], s["read_noise"], s["other_noise"])
     contrast = signal["contrast_photoelectrons"]
     rms = "count"
-    return xr.Dataset({
+    return dataset({
         "snr": named(apply_kernel(_snr_kernel, s["frame_stacks"], contrast, *chain), "1",
                      "contrast signal-to-noise ratio after frame stacking"),
         "snr_frame": named(apply_kernel(_snr_frame_kernel, contrast, *chain), "1",

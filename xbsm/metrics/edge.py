@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._kernels import apply_kernel
+from .._kernels import apply_kernel, dataset
 from .._metadata import named
 
 __all__ = [
@@ -253,7 +253,7 @@ def edge_terms(otf_slice, ifov, weights):
         ``rer`` (IBSM Eq. 3-61) and ``eho`` (IBSM Eq. 3-60). [1]
     """
     rer, eho = _apply_edge(_edge_terms_kernel, otf_slice, weights, ifov, n_out=2)
-    return xr.Dataset({
+    return dataset({
         "rer": named(rer, "1", "relative edge response", references="IBSM Eq. 3-61"),
         "eho": named(eho, "1", "edge height overshoot", references="IBSM Eq. 3-60"),
     })

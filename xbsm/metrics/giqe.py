@@ -20,7 +20,7 @@ import xarray as xr
 
 from xbsm import flags as _flags
 
-from .._kernels import apply_kernel
+from .._kernels import apply_kernel, dataset
 from .._metadata import named
 
 __all__ = [
@@ -540,7 +540,7 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
                   "NIIRS (GIQE 3)", references=GIQE_REFERENCES[3])
     values = {"snr": snr, "rer": rer, "gsd": gsd, "niirs": niirs,
               "elevation": None if elevation is None else _da(elevation)}
-    return xr.Dataset({"niirs": niirs, "flags": _label_flags(*_version_tests(calibration, values))})
+    return dataset({"niirs": niirs, "flags": _label_flags(*_version_tests(calibration, values))})
 
 
 def giqe4(
@@ -608,7 +608,7 @@ def giqe4(
                   "1", "NIIRS (GIQE 4)", references=GIQE_REFERENCES[4])
     values = {"snr": snr, "rer": rer, "gsd": gsd_gp, "elevation": elevation, "niirs": niirs}
     fl = _label_flags(*_version_tests(calibration, values))
-    return xr.Dataset({"niirs": niirs, "gsd_gp": gsd_gp, "flags": fl})
+    return dataset({"niirs": niirs, "gsd_gp": gsd_gp, "flags": fl})
 
 
 def giqe5_rer(rer_x, rer_y):
@@ -685,7 +685,7 @@ def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q
     fl = _label_flags(*_version_tests(calibration, _giqe5_tested(
         calibration, snr=snr, rer=rer, gsd=gsd, gsd_w=gsd_w, elevation=elevation, q=q,
         niirs=niirs)))
-    return xr.Dataset({"niirs": niirs, "gsd_w": gsd_w, "rer": rer, "flags": fl})
+    return dataset({"niirs": niirs, "gsd_w": gsd_w, "rer": rer, "flags": fl})
 
 
 def _giqe5_tested(calibration, *, snr, rer, gsd, gsd_w, elevation, q, niirs):
@@ -760,7 +760,7 @@ def giqe_by_version(*, rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noi
     # the dims each version's NIIRS depends on, in the order its equation broadcasts them
     niirs_dims = ((rer, gsd, eho, noise_gain, snr), (rer, gsd_gp, eho, noise_gain, snr),
                   (gsd_w, snr, rer5))
-    return xr.Dataset({
+    return dataset({
         "niirs": niirs,
         "flags": _flags_by_version(calibration, tested, niirs_dims),
         "rer_giqe5": rer5,

@@ -17,7 +17,7 @@ import math
 import numpy as np
 import xarray as xr
 
-from .._kernels import apply_kernel
+from .._kernels import apply_kernel, dataset
 from .._metadata import named
 from ..methods import Method
 from . import aperture, filters, motion, turbulence, wavefront
@@ -120,7 +120,7 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
     """
     s, sc = sensor, scenario
     if fy is None:
-        fx, fy_ = frequency * _UNIT_X, frequency * _UNIT_Y
+        fx, fy_ = (apply_kernel(np.multiply, frequency, unit) for unit in (_UNIT_X, _UNIT_Y))
         radial = frequency
     else:
         fx, fy_ = frequency, fy
@@ -128,7 +128,7 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
     wavelength = spectral_weights["wavelength"]
     wl, w = spectral_bins(wavelength, spectral_weights, method.otf_wavelengths)
     wl = xr.DataArray(np.asarray(wl), dims="wavelength", coords={"wavelength": np.asarray(wl)})
-    w = w / w.sum("wavelength")
+    w = apply_kernel(_normalised, w, core=[["wavelength"]], outputs=[("wavelength",)])
     parts = {
         # sensor quantities, weighted per scenario where they depend on wavelength
         "aperture": _spectral(_aperture_band_kernel, radial, s["aperture_diameter"],
@@ -149,12 +149,13 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
     fil = _filter(s, fx, fy_, method)
     system = apply_kernel(np.multiply, unfiltered, fil,
                        dtype=np.result_type(unfiltered.dtype, fil.dtype))
-    out = xr.Dataset({**{name: _otf(part, f"{name} OTF") for name, part in parts.items()},
-                      "filter": _otf(fil, "post-processing filter OTF")})
-    out["system_unfiltered"] = _otf(unfiltered, "system OTF without the filter")
-    out["system"] = _otf(system, "system OTF")
-    out["coherence_diameter"] = named(r0_band, "m", "band-weighted coherence diameter r0")
-    return out
+    return dataset({
+        **{name: _otf(part, f"{name} OTF") for name, part in parts.items()},
+        "filter": _otf(fil, "post-processing filter OTF"),
+        "system_unfiltered": _otf(unfiltered, "system OTF without the filter"),
+        "system": _otf(system, "system OTF"),
+        "coherence_diameter": named(r0_band, "m", "band-weighted coherence diameter r0"),
+    })
 
 
 def _otf(out: xr.DataArray, long_name: str) -> xr.DataArray:
@@ -226,6 +227,11 @@ def _band_r0_kernel(cn2, r0_ref, wl, w):
     """Band-weighted r0; infinite where cn2 = 0 (numpy)."""
     r0 = turbulence._band_kernel(r0_ref, turbulence.REFERENCE_WAVELENGTH, wl, w)
     return np.where(cn2 > 0, r0, np.inf)
+
+
+def _normalised(weights):
+    """Weights over the last axis scaled to sum to one (numpy)."""
+    return weights / weights.sum(axis=-1, keepdims=True)
 
 
 def _product_kernel(*factors):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import xarray as xr
 
@@ -118,18 +120,22 @@ def path_coherence_diameter(cn2, wavelength=REFERENCE_WAVELENGTH, path_dim="path
     return described(out, path_coherence_diameter, units="m")
 
 
+@functools.lru_cache(maxsize=16)
 def _path_nodes(path_samples, rule):
-    """Nodes t in [0, 1] and weights of the normalised path integral."""
+    """Nodes t in [0, 1] and weights of the normalised path integral (read-only, cached)."""
     if rule == "trapezoid":
         t = np.linspace(0.0, 1.0, path_samples)
         w = np.full(path_samples, 1.0 / (path_samples - 1))
         w[[0, -1]] *= 0.5
-        return t, w
-    # Gauss-Legendre in u with z = L u^2: the substitution makes the
-    # (z/L)^(5/3) weight and the near-target boundary layer smooth in u.
-    x, w = np.polynomial.legendre.leggauss(path_samples)
-    u = 0.5 * (x + 1.0)
-    return u**2, w * u  # dz/L = 2u du, du = dx/2
+    else:
+        # Gauss-Legendre in u with z = L u^2: the substitution makes the
+        # (z/L)^(5/3) weight and the near-target boundary layer smooth in u.
+        x, w = np.polynomial.legendre.leggauss(path_samples)
+        u = 0.5 * (x + 1.0)
+        t, w = u**2, w * u  # dz/L = 2u du, du = dx/2
+    for a in (t, w):
+        a.flags.writeable = False
+    return t, w
 
 
 def slant_path_coherence_diameter(

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from xbsm._kernels import apply_kernel
+from xbsm._kernels import apply_kernel, dataset
 
 
 def _coord(name, values, units):
@@ -119,3 +119,34 @@ def test_floating_point_exceptions_give_ieee_results_without_warnings():
     zero = xr.DataArray([0.0, 1.0], dims="x")
     out = apply_kernel(np.divide, 1.0, zero)
     assert np.isinf(out[0]) and out[1] == 1.0
+
+
+def test_dataset_equals_xarray_for_variables_sharing_coordinates(monkeypatch):
+    # reference: xarray's own constructor on the same variables
+    variables = {"a": A, "b": B, "c": C}
+    want = xr.Dataset(variables)
+    monkeypatch.setattr(xr.Dataset, "__init__", _only_from_variables(xr.Dataset.__init__))
+    xr.testing.assert_identical(dataset(variables), want)
+
+
+def _only_from_variables(init):
+    def guarded(self, data_vars=None, coords=None, attrs=None):
+        # the shortcut passes Variables, never DataArrays to be aligned
+        assert all(not isinstance(v, xr.DataArray) for v in (data_vars or {}).values())
+        init(self, data_vars, coords, attrs)
+    return guarded
+
+
+def test_dataset_keeps_the_described_coordinate():
+    # a coordinate carried without attributes by one variable and with them by another:
+    # the result describes it (the stages' outputs name their coordinates once)
+    bare = C.assign_coords(ground_range=G.values)
+    out = dataset({"bare": bare, "described": C})
+    assert out["ground_range"].attrs == {"units": "m", "long_name": "ground_range"}
+
+
+def test_dataset_leaves_disagreements_to_xarray():
+    # different ground ranges: xarray's outer join, as xr.Dataset gives
+    shifted = C.assign_coords(ground_range=[2.0, 3.0, 4.0])
+    xr.testing.assert_identical(dataset({"a": C, "b": shifted}),
+                                xr.Dataset({"a": C, "b": shifted}))
