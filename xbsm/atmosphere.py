@@ -100,7 +100,8 @@ _RULES = MappingProxyType({
 })
 #: Components that ``"same-elevation"`` interpolates along the line of sight (indices of
 #: TRANS, SURF_EMIS, GRND_RFLT: attenuated along the path; the path radiances are not).
-_ALONG_PATH = (0, 2, 4)
+_ALONG_PATH = np.array([0, 2, 4])
+_ACROSS_PATH = np.array([1, 3])  # PTH_THRML, SOL_SCAT: path radiances, at fixed ground range
 #: Scale height of the extinction profile behind the ``"same-elevation"`` altitude weight:
 #: 2 km is the best of 0.5-3 km in the altitude leave-one-out (docs/atmosphere.md). [m]
 SCALE_HEIGHT = 2000.0
@@ -455,26 +456,38 @@ def _interpolate_database(db, altitude, ground_range, visibility, interpolation,
     n_comp, n_wl = cube.shape[-2:]
     out = np.empty((vis.size, n_comp, n_wl), dtype=np.float64)
     step = max(1, _BLOCK // max(1, n_comp * n_wl))
+    all_components = np.arange(n_comp)
     for start in range(0, vis.size, step):  # blocks of scenarios bound the memory
         s = slice(start, start + step)
         v = vis[s]
 
-        def at(a, g, v=v):
-            return cube[v, a, g].astype(np.float64)
+        def at(a, g, components, v=v):
+            spectra = cube[v, a, g]  # whole (component, wavelength) blocks: the fastest gather
+            if components is not all_components:
+                spectra = spectra[:, components]
+            return spectra.astype(np.float64)
 
-        # altitude at both bracketing ground ranges first, then ground range (pyBSM's order)
-        out[s] = _two_steps((at(a0[s], g0[s]), at(a1[s], g0[s])),
-                            (at(a0[s], g1[s]), at(a1[s], g1[s])),
-                            (wa[s], wa[s]), wg[s], (alt_rule, gr_rule))
-        if along is not None:
-            ((l0, l1, lw), (h0, h1, hw)), weight, usable = along
-            # ground range inside each table first, then altitude along the line of sight
-            path_values = _two_steps((at(a0[s], l0[s]), at(a0[s], l1[s])),
-                                     (at(a1[s], h0[s]), at(a1[s], h1[s])),
-                                     (lw[s], hw[s]), weight[s], ("log", "log"))
-            keep = usable[s][:, None]
-            for c in _ALONG_PATH:
-                out[s, c] = np.where(keep, path_values[:, c], out[s, c])
+        def fixed_range(components, s=s):
+            # altitude at both bracketing ground ranges first, then ground range (pyBSM's order)
+            return _two_steps((at(a0[s], g0[s], components), at(a1[s], g0[s], components)),
+                              (at(a0[s], g1[s], components), at(a1[s], g1[s], components)),
+                              (wa[s], wa[s]), wg[s], (alt_rule, gr_rule))
+
+        if along is None:
+            out[s] = fixed_range(all_components)
+            continue
+        ((l0, l1, lw), (h0, h1, hw)), weight, usable = along
+        out[s][:, _ACROSS_PATH] = fixed_range(_ACROSS_PATH)
+        # ground range inside each table first, then altitude along the line of sight
+        out[s][:, _ALONG_PATH] = _two_steps(
+            (at(a0[s], l0[s], _ALONG_PATH), at(a0[s], l1[s], _ALONG_PATH)),
+            (at(a1[s], h0[s], _ALONG_PATH), at(a1[s], h1[s], _ALONG_PATH)),
+            (lw[s], hw[s]), weight[s], ("log", "log"))
+        fallback = ~usable[s]
+        if fallback.any():  # the fixed-range rule where the line of sight leaves a table
+            block = out[s]
+            block[fallback[:, None] & np.isin(all_components, _ALONG_PATH)[None, :]] = (
+                fixed_range(_ALONG_PATH)[fallback].reshape(-1, n_wl))
     return out.reshape(shape + (n_comp, n_wl))
 
 
