@@ -50,6 +50,7 @@ import numpy as np
 import xarray as xr
 from scipy.special import erfcx
 
+from ._kernels import apply_kernel, dataset
 from ._metadata import named
 from .constants import EARTH_RADIUS
 from .flags import flag, flag_attrs
@@ -100,8 +101,8 @@ _RULES = MappingProxyType({
 })
 #: Components that ``"same-elevation"`` interpolates along the line of sight (indices of
 #: TRANS, SURF_EMIS, GRND_RFLT: attenuated along the path; the path radiances are not).
-_ALONG_PATH = np.array([0, 2, 4])
-_ACROSS_PATH = np.array([1, 3])  # PTH_THRML, SOL_SCAT: path radiances, at fixed ground range
+_ALONG_PATH = (0, 2, 4)
+_ACROSS_PATH = (1, 3)  # PTH_THRML, SOL_SCAT: path radiances, at fixed ground range
 #: Scale height of the extinction profile behind the ``"same-elevation"`` altitude weight:
 #: 2 km is the best of 0.5-3 km in the altitude leave-one-out (docs/atmosphere.md). [m]
 SCALE_HEIGHT = 2000.0
@@ -437,6 +438,19 @@ def _two_steps(pair_low, pair_high, first, second, rules):
     return _interp(low, high, second, rules[1])
 
 
+def _atmosphere_kernel(altitude, ground_range, visibility, wavelength, *, path, interpolation,
+                       window):
+    """Each component's spectrum and the validity flags of every scenario (numpy kernel).
+
+    ``wavelength`` only gives the last axis of the spectra (it is the window's).
+    """
+    spectra = _spectra_kernel(altitude, ground_range, visibility, path=path,
+                              interpolation=interpolation, window=window)
+    flags = _flags_kernel(altitude, ground_range, visibility, path=path,
+                          interpolation=interpolation)
+    return (*np.moveaxis(spectra, -2, 0), flags)
+
+
 def _spectra_kernel(altitude, ground_range, visibility, *, path, interpolation, window):
     """Interpolated spectra, shape (..., component, wavelength) (numpy kernel)."""
     return _interpolate_database(_load_database(path), altitude, ground_range, visibility,
@@ -579,31 +593,20 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation="log-line
         # eager inputs: fail at the call, not inside the kernel
         _validate(*(np.asarray(a.values) for a in inputs), interpolation, db)
 
-    kwargs = {"path": file, "interpolation": interpolation}
-    spectra = xr.apply_ufunc(
-        _spectra_kernel, *inputs,
-        kwargs={**kwargs, "window": window},
-        output_core_dims=[["component", "wavelength"]],
-        dask="parallelized",
-        output_dtypes=[np.float64],
-        dask_gufunc_kwargs={"output_sizes": {"component": len(COMPONENTS),
-                                             "wavelength": wavelength.size}},
-        keep_attrs=False,
-    )
-    flags = xr.apply_ufunc(
-        _flags_kernel, *inputs, kwargs=kwargs, dask="parallelized",
-        output_dtypes=[np.int32], keep_attrs=False,
-    )
     wl = xr.DataArray(wavelength, dims="wavelength",
                       attrs={"units": "m", "long_name": "wavelength",
                              "standard_name": "radiation_wavelength"})
+    wl = wl.assign_coords(wavelength=wl)
+    *spectra, flags = apply_kernel(
+        _atmosphere_kernel, *inputs, wl, core=[[], [], [], ["wavelength"]],
+        outputs=[("wavelength",)] * len(COMPONENTS) + [()],
+        dtype=[np.float64] * len(COMPONENTS) + [np.int32],
+        path=file, interpolation=interpolation, window=window)
     described = zip(VARIABLES, _LONG_NAMES, _SI_UNITS, strict=True)
-    data = {
-        name: named(spectra.isel(component=i, drop=True), units, long_name)
-        for i, (name, long_name, units) in enumerate(described)
-    }
-    data["flags"] = flags.assign_attrs(flag_attrs("atmosphere validity flags"))
-    out = xr.Dataset(data).assign_coords(wavelength=wl)
+    data = {name: named(values, units, long_name)
+            for values, (name, long_name, units) in zip(spectra, described, strict=True)}
+    flags.attrs = flag_attrs("atmosphere validity flags")
+    out = dataset({**data, "flags": flags})
     return out.assign_attrs(
         source="MODTRAN 5.2.1 database of pyBSM 0.16.1 (xbsm atmosphere.nc)",
         interpolation=interpolation,
