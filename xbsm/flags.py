@@ -28,6 +28,8 @@ from types import MappingProxyType
 import numpy as np
 import xarray as xr
 
+from ._kernels import apply_kernel
+
 # bit -> (meaning, description). The meanings are CF flag_meanings words.
 FLAGS = MappingProxyType({
     "beyond_database": (
@@ -168,9 +170,14 @@ def flag_attrs(long_name: str = "validity flags") -> dict:
 
 def set_flag(flags: xr.DataArray, name: str, condition: xr.DataArray) -> xr.DataArray:
     """Return ``flags`` with bit ``name`` set wherever ``condition`` holds."""
-    bit = np.int32(flag(name))
-    out = xr.where(condition, flags | bit, flags).astype(np.int32)
-    return out.assign_attrs(flag_attrs())
+    out = apply_kernel(_set_bit, condition, flags, bit=np.int32(flag(name)), dtype=np.int32)
+    out.attrs = flag_attrs()
+    return out
+
+
+def _set_bit(condition, flags, *, bit):
+    """``flags`` with ``bit`` set where ``condition`` (numpy kernel; xr.where's dim order)."""
+    return np.where(condition, flags | bit, flags).astype(np.int32)
 
 
 def empty_flags(like: xr.DataArray | None = None) -> xr.DataArray:
