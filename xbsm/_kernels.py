@@ -99,7 +99,6 @@ def apply_kernel(kernel, /, *args, core=None, outputs=((),), sizes=None, dtype=f
         dask_gufunc_kwargs={"allow_rechunk": True, "output_sizes": dict(sizes or {})})
 
 
-
 def _is_lazy(a) -> bool:
     return getattr(a.data, "chunks", None) is not None
 

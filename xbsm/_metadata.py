@@ -67,4 +67,3 @@ def result(variables: dict, method, **attrs) -> xr.Dataset:
     ds = dataset({k: v for k, v in variables.items() if k not in dims})
     ds.attrs = attrs
     return ds.drop_vars([c for c in ds.coords if ds[c].ndim == 0 and c not in ds.dims])
-
