@@ -413,11 +413,9 @@ def _scenarios(altitude, ground_range, visibility, interpolation, db):
     return shape, altitude, vis, alt, gr, complete, along
 
 
-def _flags_kernel(altitude, ground_range, visibility, *, path, interpolation):
-    """Compute the validity flags of each scenario (numpy kernel)."""
-    db = _load_database(path)
-    shape, altitude, _, _, _, complete, along = _scenarios(
-        altitude, ground_range, visibility, interpolation, db)
+def _flags_of(scenarios):
+    """Validity flags of each scenario from its :func:`_scenarios` brackets (numpy)."""
+    shape, altitude, _, _, _, complete, along = scenarios
     out = np.where(complete, 0, flag("beyond_database"))
     sparse = (altitude > _GAP[0]) & (altitude < _GAP[1])
     out |= np.where(sparse, flag("atmosphere_sparse"), 0)
@@ -444,17 +442,10 @@ def _atmosphere_kernel(altitude, ground_range, visibility, wavelength, *, path, 
 
     ``wavelength`` only gives the last axis of the spectra (it is the window's).
     """
-    spectra = _spectra_kernel(altitude, ground_range, visibility, path=path,
-                              interpolation=interpolation, window=window)
-    flags = _flags_kernel(altitude, ground_range, visibility, path=path,
-                          interpolation=interpolation)
-    return (*np.moveaxis(spectra, -2, 0), flags)
-
-
-def _spectra_kernel(altitude, ground_range, visibility, *, path, interpolation, window):
-    """Interpolated spectra, shape (..., component, wavelength) (numpy kernel)."""
-    return _interpolate_database(_load_database(path), altitude, ground_range, visibility,
-                                interpolation, window)
+    db = _load_database(path)
+    scenarios = _scenarios(altitude, ground_range, visibility, interpolation, db)
+    spectra = _spectra_of(db, scenarios, interpolation, window)
+    return (*np.moveaxis(spectra, -2, 0), _flags_of(scenarios))
 
 
 def _interpolate_database(db, altitude, ground_range, visibility, interpolation, window):
@@ -463,8 +454,13 @@ def _interpolate_database(db, altitude, ground_range, visibility, interpolation,
     ``db`` is a :class:`_Database`, possibly with tables removed (the leave-one-out
     recipe does that).
     """
-    shape, _, vis, (a0, a1, wa), (g0, g1, wg), _, along = _scenarios(
-        altitude, ground_range, visibility, interpolation, db)
+    scenarios = _scenarios(altitude, ground_range, visibility, interpolation, db)
+    return _spectra_of(db, scenarios, interpolation, window)
+
+
+def _spectra_of(db, scenarios, interpolation, window):
+    """Spectra at each scenario from its :func:`_scenarios` brackets (numpy)."""
+    shape, _, vis, (a0, a1, wa), (g0, g1, wg), _, along = scenarios
     alt_rule, _, gr_rule = _RULES[interpolation]
     cube = db.cube[..., window]
     n_comp, n_wl = cube.shape[-2:]
