@@ -5,7 +5,9 @@ aligns, labels and carries dask only here (STYLE.md, "A kernel under a thin
 xarray layer"). One xarray binary operation costs an alignment and index copies;
 hundreds of them made one scenario slower than pyBSM.
 
-:func:`apply_kernel` is what every stage calls. It keeps what the xarray
+:func:`apply_kernel` is what every stage of the model chain calls (image
+simulation, measurement and studies, whose kernels run once per whole image or
+chunk, call ``xr.apply_ufunc`` directly). It keeps what the xarray
 arithmetic it replaces did: the arguments join as arithmetic joins them (inner,
 without copies when their indexes already agree), the result's dims are the
 union of the arguments' dims in order of first appearance, coordinates keep
@@ -46,8 +48,9 @@ def dataset(variables: dict) -> xr.Dataset:
     merge, takes xarray's own path.
     """
     arrays = [v for v in variables.values() if isinstance(v, xr.DataArray)]
+    # equal coordinate variables (index coordinates included) mean agreeing indexes
     coords = _merged_coords(arrays, set()) if len(arrays) == len(variables) else None
-    if coords is None or join_for(arrays) != "exact" or not coords[0].keys().isdisjoint(variables):
+    if coords is None or not coords[0].keys().isdisjoint(variables):
         return xr.Dataset(variables)
     return xr.Dataset({name: v.variable for name, v in variables.items()},
                       coords=xr.Coordinates(*coords))
@@ -123,14 +126,14 @@ def _apply_eager(func, args, labelled, core, outputs):
         for dim, size in zip(a.dims, a.shape, strict=True):
             if sizes.setdefault(dim, size) != size:
                 return None
+    arrays = [a for a in labelled if isinstance(a, xr.DataArray)]
+    coords = _merged_coords(arrays, {d for c in core for d in c} - {d for o in outputs for d in o})
+    if coords is None:  # decided before the kernel runs, so that it never runs twice
+        return None
     broadcast = tuple(d for d in sizes if d not in core_dims)
     data = [_layout(a, broadcast, tuple(c)) if isinstance(a, (xr.DataArray, xr.Variable))
             else a for a, c in zip(args, core, strict=True)]
     result = func(*data)
-    arrays = [a for a in labelled if isinstance(a, xr.DataArray)]
-    coords = _merged_coords(arrays, {d for c in core for d in c} - {d for o in outputs for d in o})
-    if coords is None:
-        return None
     attrs = dict((arrays or labelled)[0].attrs)
     results = result if len(outputs) > 1 else (result,)
     made = []
