@@ -532,10 +532,7 @@ def _kernel(kernel) -> xr.DataArray:
     if kernel is None:
         kernel = [[1.0]]
     if isinstance(kernel, xr.DataArray):
-        if set(kernel.dims) != {"kernel_y", "kernel_x"}:
-            raise ValueError("filter_kernel must have dims ('kernel_y', 'kernel_x')")
-        if kernel.dtype.kind not in "iuf":
-            raise ValueError(f"filter_kernel must hold real numbers; got dtype {kernel.dtype}")
+        _check_kernel_labels(kernel)
         out = kernel.transpose("kernel_y", "kernel_x").astype(float)
     else:
         try:
@@ -550,12 +547,25 @@ def _kernel(kernel) -> xr.DataArray:
                 f"filter_kernel must be a non-empty 2-D array; got shape {array.shape}"
             )
         out = xr.DataArray(array, dims=("kernel_y", "kernel_x"))
-    if not np.all(np.isfinite(out.values)):
+    _check_kernel_values(out.values)
+    return out.assign_attrs(units="1", long_name="post-processing filter kernel")
+
+
+def _check_kernel_labels(kernel) -> None:
+    """A labelled kernel (DataArray or Variable) has the kernel dims and real numbers."""
+    if set(kernel.dims) != {"kernel_y", "kernel_x"}:
+        raise ValueError("filter_kernel must have dims ('kernel_y', 'kernel_x')")
+    if kernel.dtype.kind not in "iuf":
+        raise ValueError(f"filter_kernel must hold real numbers; got dtype {kernel.dtype}")
+
+
+def _check_kernel_values(values: np.ndarray) -> None:
+    """A kernel's values are finite and sum to one (within 1e-9)."""
+    if not np.all(np.isfinite(values)):
         raise ValueError("filter_kernel must be finite")
-    total = float(out.sum())
+    total = float(np.sum(values))
     if not math.isclose(total, 1.0, rel_tol=0, abs_tol=1e-9):
         raise ValueError(f"filter_kernel must sum to 1 (within 1e-9); got {total!r}")
-    return out.assign_attrs(units="1", long_name="post-processing filter kernel")
 
 
 @_suggesting
@@ -665,6 +675,58 @@ def check_kind(ds: xr.Dataset, kind: str, argument: str) -> None:
         )
 
 
+def _check_parameters(kind: str, variables, specs) -> None:
+    """Every parameter of one dataset present, on allowed dims and within its range.
+
+    The eager scalars (all of them in a single scenario) are compared in one array
+    operation; a violation is reported for the first offending parameter in ``specs``
+    order, as one parameter at a time would.
+    """
+    missing = [name for name in specs if name not in variables]
+    if missing:
+        raise ValueError(f"the {kind} dataset has no parameter {missing[0]!r}; "
+                         f"make it with xbsm.{kind}(...)")
+    values = [variables[name] for name in specs]
+    scalar = [v.ndim == 0 and _is_eager(v) for v in values]
+    low, high, low_open, high_open = _bounds(kind, specs)
+    flat = np.array([v.values if s else np.nan for v, s in zip(values, scalar, strict=True)],
+                    dtype=float)
+    outside = (np.where(low_open, flat <= low, flat < low)
+               | np.where(high_open, flat >= high, flat > high) | np.isnan(flat))
+    for (name, spec), value, is_scalar, bad in zip(specs.items(), values, scalar, outside,
+                                                   strict=True):
+        if is_scalar:
+            if bad:
+                _raise(name, spec, value.values)
+            continue
+        # a parameter swept alongside another on that one's own dimension is paired
+        # with it (a derived default such as pixel_pitch_y, or a user's paired sweep)
+        paired = tuple(dim for dim in value.dims
+                       if dim in variables and variables[dim].dims == (dim,))
+        _check_dims(name, value, allowed=(f"{name}_wavelength", *paired))
+        if _is_eager(value):
+            mask = spec.violated(value.values)
+            if np.any(mask):
+                _raise(name, spec, value.values[mask].ravel()[0])
+
+
+def _is_eager(variable: xr.Variable) -> bool:
+    """Whether a Variable holds its values (not dask); ``Variable.chunks`` costs far more."""
+    return getattr(variable.data, "chunks", None) is None
+
+
+def _bounds(kind: str, specs) -> tuple:
+    """Each spec's (low, high, low_open, high_open) as arrays, in ``specs`` order."""
+    if kind not in _BOUNDS:
+        _BOUNDS[kind] = tuple(np.array([getattr(s, field) for s in specs.values()])
+                              for field in ("low", "high", "low_open", "high_open"))
+    return _BOUNDS[kind]
+
+
+_BOUNDS: dict[str, tuple] = {}
+"""Cache of :func:`_bounds` by dataset kind (the spec tables are fixed)."""
+
+
 def check_inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> None:
     """Validate a sensor and a scenario again where a model call receives them.
 
@@ -683,21 +745,7 @@ def check_inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> None:
     # on the datasets' Variables: a DataArray per parameter would cost more than the checks
     for kind, ds, specs in (("sensor", sensor, SENSOR_SPECS),
                             ("scenario", scenario, SCENARIO_SPECS)):
-        variables = ds.variables
-        for name, spec in specs.items():
-            if name not in variables:
-                raise ValueError(f"the {kind} dataset has no parameter {name!r}; "
-                                 f"make it with xbsm.{kind}(...)")
-            value = variables[name]
-            # a parameter swept alongside another on that one's own dimension is paired
-            # with it (a derived default such as pixel_pitch_y, or a user's paired sweep)
-            paired = tuple(dim for dim in value.dims
-                           if dim in variables and variables[dim].dims == (dim,))
-            _check_dims(name, value, allowed=(f"{name}_wavelength", *paired))
-            if value.chunks is None:
-                mask = spec.violated(value.values)
-                if np.any(mask):
-                    _raise(name, spec, value.values[mask].ravel()[0])
+        _check_parameters(kind, ds.variables, specs)
     low, high = (sensor.variables[name] for name in ("wavelength_min", "wavelength_max"))
     if low.ndim or high.ndim or not float(low.values) < float(high.values):
         raise ValueError("wavelength_min and wavelength_max must be scalars with "
@@ -705,7 +753,9 @@ def check_inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> None:
     if "filter_kernel" not in sensor:
         raise ValueError("the sensor dataset has no parameter 'filter_kernel'; make it with "
                          "xbsm.sensor(...)")
-    _kernel(sensor["filter_kernel"])  # an edited kernel: dims, finite, sums to 1
+    kernel = sensor.variables["filter_kernel"]  # an edited kernel: dims, finite, sums to 1
+    _check_kernel_labels(kernel)
+    _check_kernel_values(kernel.values)
     values, indexes = {}, {}
     for ds in (sensor, scenario):
         own = ds.indexes
