@@ -127,11 +127,20 @@ def database_path(path=None) -> Path:
     pathlib.Path
         Resolved path of an existing file.
     """
-    if path is not None:
-        candidates = [Path(path)]
-    else:
-        here = Path(__file__).resolve().parent
-        candidates = [here / "data" / "atmosphere.nc", here.parent / "atmosphere.nc"]
+    if path is None:
+        return _default_database()
+    return _existing([Path(path)])
+
+
+@functools.cache
+def _default_database() -> Path:
+    """The packaged database, found once per process."""
+    here = Path(__file__).resolve().parent
+    return _existing([here / "data" / "atmosphere.nc", here.parent / "atmosphere.nc"])
+
+
+def _existing(candidates) -> Path:
+    """The first existing file of ``candidates``, resolved."""
     for candidate in candidates:
         if candidate.is_file():
             return candidate.resolve()

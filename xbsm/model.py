@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 
 from . import flags as fl
-from . import geometry, metrics, noise, params, radiometry
+from . import _one_scenario, geometry, metrics, noise, params, radiometry
 from ._metadata import result
 from .atmosphere import band_atmosphere
 from .methods import Method
@@ -52,7 +52,9 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
     check_inputs(sensor, scenario)
     if targets not in ("giqe", "scenario"):
         raise ValueError(f"targets must be 'giqe' or 'scenario'; got {targets!r}")
-    return _snr(sensor, scenario, resolve_method(method), targets)[0]
+    m = resolve_method(method)
+    return _one_scenario.snr(sensor, scenario, m, targets,
+                             lambda: _snr(sensor, scenario, m, targets)[0])
 
 
 def _snr(sensor: xr.Dataset, scenario: xr.Dataset, m: Method, targets: str):
@@ -135,6 +137,12 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
     check_inputs(sensor, scenario)
     m = resolve_method(method)
     calibration = metrics.giqe_calibrations(calibration)
+    return _one_scenario.niirs(sensor, scenario, m, calibration,
+                               lambda: _niirs(sensor, scenario, m, calibration))
+
+
+def _niirs(sensor: xr.Dataset, scenario: xr.Dataset, m: Method, calibration) -> xr.Dataset:
+    """The NIIRS chain on validated inputs, labelled stage by stage."""
     r, cutoff = _snr(sensor, scenario, m, "giqe")
     view = geometry.viewing_geometry(
         scenario["ground_range"], scenario["altitude"], sensor["pixel_pitch_x"],
