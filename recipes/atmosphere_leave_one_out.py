@@ -15,21 +15,35 @@ Run from the repository root with the project environment (numbers go to
 docs/atmosphere.md; see ``recipes/README.md``)::
 
     .venv/bin/python recipes/atmosphere_leave_one_out.py
+    .venv/bin/python recipes/atmosphere_leave_one_out.py --candidates  # that table only
+
+The candidate rules (``CANDIDATES``) interpolate across altitude through more than the
+two bracketing tables; they are not in the package (none met the target; see
+docs/atmosphere.md).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
+import sys
 
 import numpy as np
+from scipy.special import erfcx
 
 from xbsm.atmosphere import (
+    _GAP,
     COMPONENTS,
+    SCALE_HEIGHT,
+    _bracket,
+    _ground_range_at_elevation,
     _interp,
     _interpolate_database,
     _load_database,
     database_path,
 )
+from xbsm.constants import EARTH_RADIUS
+from xbsm.geometry import slant_range, target_elevation_angle
 
 WAVELENGTHS_UM = (0.45, 0.6, 1.0, 2.2, 4.0, 10.0)
 #: a value counts when it is at least this fraction of its spectrum's maximum
@@ -127,8 +141,11 @@ def _without(db, axis: str, removed, wavelength_index):
         wavelength_index], **{axis: coordinate})
 
 
-def kernel_errors(db, axis: str, rule: str, wavelength_index, spacing=2, visibility=None):
+def kernel_errors(db, axis: str, rule, wavelength_index, spacing=2, visibility=None):
     """|rebuilt / true - 1| per component, every interior table, by xbsm's own kernel.
+
+    ``rule`` names an ``interpolation`` of the package, or is a candidate rule (a
+    callable of :data:`CANDIDATES`) called as ``rule(db, altitude, ground_range, visibility)``.
 
     Scored tables: those whose two neighbours ``spacing / 2`` nodes away exist at the
     same (altitude, ground range), as in :func:`relative_errors`, below 20 km in altitude.
@@ -154,7 +171,9 @@ def kernel_errors(db, axis: str, rule: str, wavelength_index, spacing=2, visibil
             continue
         alt = np.broadcast_to(alt, other.shape)[keep]
         gr = np.broadcast_to(gr, other.shape)[keep]
-        est = _interpolate_database(thin, alt, gr, db.visibility[v[keep]], rule, slice(None))
+        vis = db.visibility[v[keep]]
+        est = (rule(thin, alt, gr, vis) if callable(rule)
+               else _interpolate_database(thin, alt, gr, vis, rule, slice(None)))
         true = true[keep].astype(np.float64)
         for c, name in enumerate(COMPONENTS):
             t, e = true[:, c, wavelength_index], est[:, c]
@@ -185,9 +204,225 @@ def print_rule_tables(db, wl):
                           + " | ".join(_cell(r[name]) for r in results) + " |")
 
 
+# --- Candidate altitude rules from more than two tables (issue 12) -------------------------
+# Not in the package: none met the target (docs/atmosphere.md, "More than two altitude
+# tables"). Each reads every altitude table up to 24.5 km along the scenario's line of
+# sight, as "same-elevation" reads its two brackets, and interpolates across altitude
+# through the brackets and the tables beyond them (and the ground, where the optical
+# depth is 0), vectorised over scenarios and wavelengths.
+
+_ALONG = (0, 2, 4)  # TRANS, SURF_EMIS, GRND_RFLT: the components attenuated along the path
+
+
+def _same_elevation_logs(db, altitude, ground_range, visibility):
+    """ln of TRANS, SURF_EMIS, GRND_RFLT in every table up to 24.5 km at the scenario's
+    target elevation angle (log-linear in ground range), and where each table covers it."""
+    v = np.searchsorted(-db.visibility, -visibility)
+    elevation = target_elevation_angle(slant_range(ground_range, altitude), altitude)
+    sin_e, cos_e = np.sin(elevation), np.cos(elevation)
+    nodes = db.altitude[db.altitude <= _GAP[0]]
+    last = db.ground_range[-1]
+    logs = np.empty((altitude.size, nodes.size, len(_ALONG), db.cube.shape[-1]))
+    covered = np.empty((altitude.size, nodes.size), dtype=bool)
+    for j, node in enumerate(nodes):  # a loop over the 22 tables, not over scenarios
+        same = (node == altitude) | (ground_range == 0.0)
+        g = np.where(same, ground_range, _ground_range_at_elevation(sin_e, cos_e, node))
+        g0, g1, wg = _bracket(np.minimum(g, last), db.ground_range)
+        covered[:, j] = (elevation > 0.0) & (g <= last) & db.present[v, j, g0] & \
+            db.present[v, j, g1]
+        low = db.cube[v, j, g0][:, _ALONG].astype(np.float64)
+        high = db.cube[v, j, g1][:, _ALONG].astype(np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            logs[:, j] = np.log(_interp(low, high, wg, "log"))
+    return nodes, logs, covered, sin_e
+
+
+def _path_coordinate(kind, altitude, sin_e, scale_height):
+    """The altitude coordinate of the interpolation along a line of sight of elevation e.
+
+    "altitude"; "sqrt-altitude"; "slant" (path length from the target up to the
+    altitude, spherical Earth); "optical-path" (the optical depth of that path in an
+    exponential atmosphere of the given scale height, thin-shell path element: the
+    coordinate in which "same-elevation" is linear).
+    """
+    if kind == "altitude":
+        return altitude
+    if kind == "sqrt-altitude":
+        return np.sqrt(altitude)
+    if kind == "slant":
+        above = altitude * (2.0 * EARTH_RADIUS + altitude)
+        rise = EARTH_RADIUS * sin_e
+        return above / (np.sqrt(rise * rise + above) + rise)
+    k = EARTH_RADIUS / (2.0 * scale_height)
+
+    def above_(h):
+        return erfcx(np.sqrt(k * (sin_e * sin_e + 2.0 * h / EARTH_RADIUS))) * np.exp(
+            -h / scale_height)
+
+    return scale_height * (above_(0.0 * altitude) - above_(altitude))
+
+
+def _interior_slope(h_left, h_right, s_left, s_right, slopes):
+    """Derivative at a node between two intervals: PCHIP (Fritsch-Butland weighted
+    harmonic mean, scipy's) or Steffen's; 0 at a local extremum."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if slopes == "steffen":
+            p = (s_left * h_right + s_right * h_left) / (h_left + h_right)
+            d = (np.sign(s_left) + np.sign(s_right)) * np.minimum(
+                np.minimum(np.abs(s_left), np.abs(s_right)), 0.5 * np.abs(p))
+            return np.where(np.isfinite(d), d, 0.0)
+        w1, w2 = 2.0 * h_right + h_left, h_right + 2.0 * h_left
+        d = (w1 + w2) / (w1 / s_left + w2 / s_right)
+    monotone = (np.sign(s_left) == np.sign(s_right)) & (s_left != 0.0) & (s_right != 0.0)
+    return np.where(monotone, d, 0.0)
+
+
+def _end_slope(h_near, h_far, s_near, s_far):
+    """scipy's PCHIP derivative at the end node of two intervals (shape-preserving)."""
+    d = ((2.0 * h_near + h_far) * s_near - h_near * s_far) / (h_near + h_far)
+    d = np.where(np.sign(d) != np.sign(s_near), 0.0, d)
+    overshoot = (np.sign(s_near) != np.sign(s_far)) & (np.abs(d) > 3.0 * np.abs(s_near))
+    return np.where(overshoot, 3.0 * s_near, d)
+
+
+def _monotone_cubic(x, y, outer, target, slopes):
+    """Monotone cubic Hermite value in [x1, x2] of the stencil (x0, x1, x2, x3).
+
+    ``x`` (n, 4), ``y`` (n, 4, wavelength); ``outer`` (n, 2): whether x0 and x3 exist
+    (a missing or infinite outer value gives the one-sided end derivative, or the
+    secant without either).
+    """
+    X = [x[:, k, None] for k in range(4)]
+    Y = [y[:, k] for k in range(4)]
+    h0, h1, h2 = X[1] - X[0], X[2] - X[1], X[3] - X[2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s0, s1, s2 = (Y[1] - Y[0]) / h0, (Y[2] - Y[1]) / h1, (Y[3] - Y[2]) / h2
+    t = (target[:, None] - X[1]) / h1
+    left = outer[:, 0, None] & np.isfinite(Y[0])
+    right = outer[:, 1, None] & np.isfinite(Y[3])
+    d1 = np.where(left, _interior_slope(h0, h1, s0, s1, slopes),
+                  np.where(right, _end_slope(h1, h2, s1, s2), s1))
+    d2 = np.where(right, _interior_slope(h1, h2, s1, s2, slopes),
+                  np.where(left, _end_slope(h1, h0, s1, s0), s1))
+    t2, t3 = t * t, t * t * t
+    return ((t3 - 2.0 * t2 + t) * h1 * d1 + (-2.0 * t3 + 3.0 * t2) * (Y[2] - Y[1])
+            + (t3 - t2) * h1 * d2)  # the increment over y1
+
+
+@np.errstate(divide="ignore", invalid="ignore")
+def multi_node(db, altitude, ground_range, visibility, *, coordinate="optical-path",
+               scale_height=SCALE_HEIGHT, slopes="pchip", others="own"):
+    """Candidate rule: TRANS, SURF_EMIS, GRND_RFLT by a monotone cubic through the tables.
+
+    The optical depth -ln TRANS of the line of sight is 0 at the ground and grows
+    monotonically with altitude at a fixed elevation angle (a lower path is a prefix
+    of a higher one), so it is interpolated through the ground and the bracketing
+    tables and one table beyond each (PCHIP's or Steffen's slopes, four-point
+    stencil: the same value as a monotone cubic through all the nodes) in
+    ``coordinate`` (see :func:`_path_coordinate`). ``slopes="exp-fit"`` instead fits
+    the optical depth of the extinction ``a exp(-z / H) + b`` to the two brackets and
+    the ground (linear in ``coordinate`` where a or b comes out negative).
+
+    SURF_EMIS and GRND_RFLT (``others``): "own", ln of the value by the same cubic
+    through the tables only (no ground node); "ratio", ln(C / TRANS) linear in the
+    coordinate between the brackets, times the interpolated TRANS.
+
+    The path radiances, and every scenario where a bracket is not covered or a value
+    is not positive, are ``"same-elevation"``'s. Returns (scenario, component, wavelength).
+    """
+    base = _interpolate_database(db, altitude, ground_range, visibility, "same-elevation",
+                                 slice(None))
+    nodes, logs, covered, sin_e = _same_elevation_logs(db, altitude, ground_range, visibility)
+    n = altitude.size
+    # the ground is node 0: altitude 0, optical depth 0
+    heights = np.concatenate([[0.0], nodes])
+    x_nodes = np.broadcast_to(
+        _path_coordinate(coordinate, heights[None, :], sin_e[:, None], scale_height),
+        (n, heights.size))
+    tau = np.concatenate([np.zeros((n, 1, logs.shape[-1])), -logs[:, :, 0]], axis=1)
+    lnc = np.concatenate([np.full((n, 1, 2, logs.shape[-1]), np.nan), logs[:, :, 1:]], axis=1)
+    covered = np.concatenate([np.ones((n, 1), dtype=bool), covered], axis=1)
+    a0, a1, _ = _bracket(altitude, nodes)
+    on_node = a0 == a1
+    i1 = a0 + 1
+    i2 = np.minimum(np.where(on_node, a0 + 2, a1 + 1), nodes.size)
+    i3 = np.minimum(i2 + 1, nodes.size)
+    stencil = np.stack([i1 - 1, i1, i2, i3], axis=1)
+    rows = np.arange(n)[:, None]
+    x, ok = x_nodes[rows, stencil], covered[rows, stencil]
+    ok[:, 3] &= i3 > i2
+    target = _path_coordinate(coordinate, altitude, sin_e, scale_height)
+    t = ((target - x[:, 1]) / (x[:, 2] - x[:, 1]))[:, None]
+    y = tau[rows, stencil]
+    if slopes == "exp-fit":
+        # tau(h) = a X(h) + b s(h) through tau(h0), tau(h1) (tau(0) = 0); Cramer's rule
+        s = _path_coordinate("slant", heights[stencil[:, 1:3]], sin_e[:, None], 0.0)
+        s_t = _path_coordinate("slant", altitude, sin_e, 0.0)
+        det = (x[:, 1] * s[:, 1] - s[:, 0] * x[:, 2])[:, None]
+        a = (y[:, 1] * s[:, 1, None] - s[:, 0, None] * y[:, 2]) / det
+        b = (x[:, 1, None] * y[:, 2] - y[:, 1] * x[:, 2, None]) / det
+        fitted = a * target[:, None] + b * s_t[:, None] - y[:, 1]
+        step = np.where((a >= 0.0) & (b >= 0.0), fitted, t * (y[:, 2] - y[:, 1]))
+    else:
+        step = _monotone_cubic(x, y, ok[:, [0, 3]], target, slopes)
+    step = np.where(on_node[:, None], 0.0, step)
+    out = base.copy()
+    out[:, 0] = np.exp(-(y[:, 1] + step))
+    for k, component in ((1, 2), (2, 4)):
+        c = lnc[rows, stencil, k - 1]
+        if others == "ratio":
+            ratio = c + y  # ln(C / TRANS)
+            weight = np.where(on_node[:, None], 0.0, t)
+            ln_ratio = ratio[:, 1] + weight * (ratio[:, 2] - ratio[:, 1])
+            out[:, component] = np.exp(ln_ratio + np.log(out[:, 0]))
+        else:
+            c_step = _monotone_cubic(x, c, ok[:, [0, 3]] & (stencil[:, [0]] > 0), target, slopes
+                                     if slopes != "exp-fit" else "pchip")
+            out[:, component] = np.exp(c[:, 1] + np.where(on_node[:, None], 0.0, c_step))
+    usable = ok[:, 1] & ok[:, 2] & (db.altitude[np.minimum(a1, db.altitude.size - 1)] <= _GAP[0])
+    along = out[:, _ALONG]
+    bad = ~usable[:, None, None] | ~np.isfinite(along) | (along <= 0.0)
+    out[:, _ALONG] = np.where(bad, base[:, _ALONG], along)
+    return out
+
+
+#: Candidate rules of the study: label -> rule(db, altitude, ground_range, visibility).
+CANDIDATES = {
+    "cubic, optical path H=2 km": functools.partial(multi_node),
+    "cubic, optical path H=2 km, C/T ratio": functools.partial(multi_node, others="ratio"),
+    "cubic, optical path H=1.5 km": functools.partial(multi_node, scale_height=1500.0),
+    "cubic, optical path H=2.5 km": functools.partial(multi_node, scale_height=2500.0),
+    "Steffen, optical path H=2.5 km": functools.partial(multi_node, scale_height=2500.0,
+                                                        slopes="steffen"),
+    "cubic, altitude": functools.partial(multi_node, coordinate="altitude"),
+    "cubic, sqrt altitude": functools.partial(multi_node, coordinate="sqrt-altitude"),
+    "cubic, slant length": functools.partial(multi_node, coordinate="slant"),
+    "exp + constant fit, H=2 km": functools.partial(multi_node, slopes="exp-fit",
+                                                    others="ratio"),
+}
+
+
+def print_candidate_tables(db, wl, axes=("altitude", "ground_range")):
+    """``"same-elevation"`` and every candidate, 2x, TRANS, SURF_EMIS, GRND_RFLT."""
+    rules = {"same-elevation": "same-elevation", **CANDIDATES}
+    print("| axis | visibility | component | " + " | ".join(rules) + " |")
+    print("|---" * (3 + len(rules)) + "|")
+    for axis in axes:
+        for vis in (None, 23.0, 5.0):
+            results = [kernel_errors(db, axis, rule, wl, 2, vis) for rule in rules.values()]
+            label = "both" if vis is None else f"{vis:g} km"
+            for c in _ALONG:
+                name = COMPONENTS[c]
+                print(f"| {axis} | {label} | {name} | "
+                      + " | ".join(_cell(r[name]) for r in results) + " |", flush=True)
+
+
 def main() -> int:
     db = _load_database(str(database_path()))
     wl = np.array([int(np.argmin(np.abs(db.wavelength - w * 1e-6))) for w in WAVELENGTHS_UM])
+    if "--candidates" in sys.argv[1:]:  # only the candidate rules' table
+        print_candidate_tables(db, wl)
+        return 0
     print("Single cases: signed relative error of the rebuilt value")
     print("| axis | visibility | altitude | ground range | component | wavelength | "
           + " | ".join(m[0] for m in METHODS) + " |")
@@ -217,6 +452,10 @@ def main() -> int:
     print("xbsm's kernel on the database without the left-out tables: median / 95th "
           "percentile / max of |relative error|")
     print_rule_tables(db, wl)
+    print()
+    print("Candidate altitude rules from more than two tables (not in the package), 2x: "
+          "median / 95th percentile / max of |relative error|")
+    print_candidate_tables(db, wl)
     return 0
 
 
