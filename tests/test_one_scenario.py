@@ -129,3 +129,16 @@ def test_sweeps_dask_and_bad_values_take_the_labelled_chain():
     narrow = s.assign(wavelength_min=0.5015e-6, wavelength_max=0.5085e-6)  # no sample inside
     with pytest.raises(ValueError, match="must contain a database wavelength"):
         xbsm.niirs(narrow, sc, method="pybsm")  # exact band edges: no database sample
+
+
+def test_editing_a_result_leaves_later_results_alone():
+    s, sc = olson_sensor("red"), olson_scenario(ground_range=20000.0, visibility=5.0)
+    _one_scenario._TEMPLATES.clear()
+    first = xbsm.niirs(s, sc)  # the labelled chain's result, kept as the template
+    first.attrs["note"] = "mine"
+    first["niirs"].attrs["units"] = "edited"
+    second = xbsm.niirs(s, sc)
+    assert "note" not in second.attrs
+    assert second["niirs"].attrs["units"] == "1"
+    second["snr"].attrs["long_name"] = "edited"
+    assert xbsm.niirs(s, sc)["snr"].attrs["long_name"] != "edited"

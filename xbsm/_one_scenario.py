@@ -21,6 +21,7 @@ the labelled chain, which owns every error message.
 
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 
 import numpy as np
@@ -338,7 +339,9 @@ def niirs_values(p: dict, m, calibration, sensor: xr.Dataset) -> dict | None:
 # ---- the labelled result ---------------------------------------------------------------
 
 _TEMPLATES: OrderedDict = OrderedDict()
+"""Result structures by key, most recently used last (at most ``_MOST_TEMPLATES``)."""
 _MOST_TEMPLATES = 64
+_TEMPLATES_LOCK = threading.Lock()  # calls may come from several threads (dask, a GUI)
 
 
 def layout(sensor: xr.Dataset, scenario: xr.Dataset) -> tuple:
@@ -353,14 +356,17 @@ def labelled(key: tuple, values: dict, make) -> xr.Dataset:
     On the first call of a key the labelled chain's result is returned and kept as the
     template of that structure.
     """
-    template = _TEMPLATES.get(key)
+    with _TEMPLATES_LOCK:
+        template = _TEMPLATES.get(key)
+        if template is not None:
+            _TEMPLATES.move_to_end(key)
     if template is None:
         result = make()
-        _TEMPLATES[key] = result
-        while len(_TEMPLATES) > _MOST_TEMPLATES:
-            _TEMPLATES.popitem(last=False)
+        with _TEMPLATES_LOCK:  # a copy: the caller may edit the result it gets
+            _TEMPLATES[key] = result.copy(deep=True)
+            while len(_TEMPLATES) > _MOST_TEMPLATES:
+                _TEMPLATES.popitem(last=False)
         return result
-    _TEMPLATES.move_to_end(key)
     coords = template.coords
     if any(not np.array_equal(values[name], v.values)
            for name, v in coords.variables.items() if name in values):
