@@ -367,17 +367,12 @@ def labelled(key: tuple, values: dict, make) -> xr.Dataset:
             while len(_TEMPLATES) > _MOST_TEMPLATES:
                 _TEMPLATES.popitem(last=False)
         return result
-    coords = template.coords
-    if any(not np.array_equal(values[name], v.values)
-           for name, v in coords.variables.items() if name in values):
-        coords = xr.Coordinates({name: xr.Variable(v.dims, values.get(name, v.values),
-                                                   dict(v.attrs))
-                                 for name, v in coords.variables.items()})
-    data = {name: xr.Variable(v.dims, np.asarray(values[name], dtype=v.dtype).reshape(v.shape),
-                              dict(v.attrs))
-            for name, v in template.data_vars.variables.items()}
-    return xr.Dataset(data, coords=coords, attrs=dict(template.attrs))
-
+    out = template.copy(deep=False, data={  # copies the attributes too
+        name: np.asarray(values[name], dtype=v.dtype).reshape(v.shape)
+        for name, v in template.data_vars.variables.items()})
+    changed = {name: (v.dims, values[name], v.attrs) for name, v in out.coords.variables.items()
+               if name in values and not np.array_equal(values[name], v.values)}
+    return out.assign_coords(changed) if changed else out
 
 def snr(sensor: xr.Dataset, scenario: xr.Dataset, m, targets: str, make) -> xr.Dataset:
     """:func:`xbsm.snr` of one scenario; ``make()`` is the labelled chain for the rest."""

@@ -305,12 +305,13 @@ def _partial_spectral_coverage(sensor: xr.Dataset) -> bool:
     The ends are compared with a relative tolerance of 1e-9 (a curve given at the
     band edges in another floating-point spelling covers the band).
     """
-    low, high = float(sensor["wavelength_min"]), float(sensor["wavelength_max"])
+    variables = sensor.variables  # not a DataArray per parameter: single calls are hot
+    low, high = (float(variables[name].values) for name in ("wavelength_min", "wavelength_max"))
     tolerance = 1e-9 * high
     for name in SPECTRAL:
         dim = f"{name}_wavelength"
-        if dim in sensor[name].dims:
-            wavelengths = sensor[dim].values
+        if dim in variables[name].dims:
+            wavelengths = variables[dim].values
             if wavelengths[0] > low + tolerance or wavelengths[-1] < high - tolerance:
                 return True
     return False
