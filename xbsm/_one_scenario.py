@@ -109,8 +109,7 @@ def _radiances(p: dict, atm: dict, wavelength, targets: str, knobs: dict):
 
 
 def _signal(p: dict, atm: dict, wavelength, radiances, knobs: dict) -> dict:
-    """Band terms of the sensor and the photoelectron terms (``sensor_band_terms``,
-    ``signal_terms``)."""
+    """The sensor's band terms and the photoelectron terms (radiometry's two orchestrators)."""
     optics = radiometry._optics_transmission_kernel(
         p["cold_filter_transmission"], p["obscuration_ratio"],
         _on_band(p, "optics_transmission", wavelength))
@@ -199,8 +198,7 @@ def snr_values(p: dict, m, targets: str, sensor: xr.Dataset) -> tuple | None:
 # ---- the NIIRS chain -------------------------------------------------------------------
 
 def _otf_band(weights, wavelength, count: int):
-    """Normalised OTF weights over (possibly binned) wavelengths (``otf_weights``,
-    ``spectral_bins``)."""
+    """Normalised OTF weights over (possibly binned) wavelengths, as the OTF stage makes them."""
     weights = np.where(weights > 0, weights, 0.0)
     if not weights.sum() > 0:
         weights = np.ones_like(weights)
@@ -226,8 +224,11 @@ def _filter(p: dict, fx, fy, m):
 
 
 def _system(p: dict, m, nodes, wavelength, weights, time, slant):
-    """Unfiltered and filtered system OTF on the x and y slices, and the band r0
-    (``system_components``): frequency along the first axis, orientation along the second."""
+    """Unfiltered and filtered system OTF on the x and y slices, and the band r0.
+
+    As ``system_components``, with frequency along the first axis and orientation (x, y)
+    along the second.
+    """
     fx, fy = nodes[:, None] * [1.0, 0.0], nodes[:, None] * [0.0, 1.0]
     wl, w = _otf_band(weights, wavelength, m.otf_wavelengths)
     cn2 = p["cn2_at_1m"]

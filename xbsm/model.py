@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from . import flags as fl
 from . import _one_scenario, geometry, metrics, noise, params, radiometry
+from . import flags as fl
 from ._metadata import result
 from .atmosphere import band_atmosphere
 from .methods import Method
