@@ -210,7 +210,8 @@ def print_rule_tables(db, wl):
 # The first is the package's "optical-depth-cubic" (its prototype: the package reads only
 # the four tables of the stencil and, in the lowest interval, also uses the table above
 # for the slopes of SURF_EMIS and GRND_RFLT); the others are not in the package
-# (docs/atmosphere.md, "optical-depth-cubic"). Each reads every altitude table up to 24.5 km along the scenario's line of
+# (docs/atmosphere.md, "optical-depth-cubic").
+# Each reads every altitude table up to 24.5 km along the scenario's line of
 # sight, as "same-elevation" reads its two brackets, and interpolates across altitude
 # through the brackets and the tables beyond them (and the ground, where the optical
 # depth is 0), vectorised over scenarios and wavelengths.

@@ -398,7 +398,7 @@ def test_optical_depth_cubic_is_monotone_along_a_long_low_line_of_sight(db):
     elevation = np.radians(2.0)
     nodes = db.altitude[db.altitude <= 8000.0]
     altitude = np.unique(np.concatenate(
-        [nodes, *(np.linspace(a, b, 41) for a, b in zip(nodes[:-1], nodes[1:]))]))
+        [nodes, *(np.linspace(a, b, 41) for a, b in zip(nodes[:-1], nodes[1:], strict=True))]))
     ground_range = atm._ground_range_at_elevation(np.sin(elevation), np.cos(elevation),
                                                   altitude)
     out = atm.atmosphere_at(xr.DataArray(altitude, dims="s"),
@@ -407,7 +407,7 @@ def test_optical_depth_cubic_is_monotone_along_a_long_low_line_of_sight(db):
                             wavelength_bounds=(0.4e-6, 2.5e-6))
     assert not out["flags"].any()
     trans = out["transmission"].transpose("s", "wavelength").values
-    for a, b in zip(nodes[:-1], nodes[1:]):
+    for a, b in zip(nodes[:-1], nodes[1:], strict=True):
         inside = trans[(altitude >= a) & (altitude <= b)]
         ends = inside[[0, -1]]
         steps = np.diff(inside, axis=0)

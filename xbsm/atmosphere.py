@@ -450,8 +450,11 @@ def _outer_tables(altitude, ground_range, vis, alt, db):
 
 
 def _pchip_interior_slope(h_left, h_right, s_left, s_right):
-    """PCHIP derivative at a node between two intervals (Fritsch-Butland weighted
-    harmonic mean of the secants, scipy's); 0 at a local extremum."""
+    """PCHIP derivative at a node between two intervals (numpy kernel).
+
+    The Fritsch-Butland weighted harmonic mean of the secants (scipy's); 0 at a local
+    extremum.
+    """
     w1, w2 = 2.0 * h_right + h_left, h_right + 2.0 * h_left
     d = (w1 + w2) / (w1 / s_left + w2 / s_right)
     monotone = (np.sign(s_left) == np.sign(s_right)) & (s_left != 0.0) & (s_right != 0.0)
@@ -459,8 +462,10 @@ def _pchip_interior_slope(h_left, h_right, s_left, s_right):
 
 
 def _pchip_end_slope(h_near, h_far, s_near, s_far):
-    """PCHIP derivative at the end node of two intervals (scipy's shape-preserving
-    three-point formula)."""
+    """PCHIP derivative at the end node of two intervals (numpy kernel).
+
+    scipy's shape-preserving three-point formula.
+    """
     d = ((2.0 * h_near + h_far) * s_near - h_near * s_far) / (h_near + h_far)
     d = np.where(np.sign(d) != np.sign(s_near), 0.0, d)
     overshoot = (np.sign(s_near) != np.sign(s_far)) & (np.abs(d) > 3.0 * np.abs(s_near))
