@@ -310,6 +310,18 @@ def _interp(low, high, weight, rule):
     return np.where(positive, logged, linear)
 
 
+def _ln_interp(low, high, weight):
+    """Natural logarithm of ``_interp(low, high, weight, "log")``, without its exp."""
+    w = weight[:, None, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ln_low, ln_high = np.log(low), np.log(high)
+        out = ln_low + w * (ln_high - ln_low)
+        linear = ~((low > 0.0) & (high > 0.0))
+        if linear.any():
+            np.log((1.0 - w) * low + w * high, out=out, where=linear)
+    return out
+
+
 def _nearest_nodes(value, nodes):
     """Text naming the database nodes on either side of ``value``."""
     i = int(np.searchsorted(nodes, value))
@@ -457,8 +469,7 @@ def _pchip_interior_slope(h_left, h_right, s_left, s_right):
     """
     w1, w2 = 2.0 * h_right + h_left, h_right + 2.0 * h_left
     d = (w1 + w2) / (w1 / s_left + w2 / s_right)
-    monotone = (np.sign(s_left) == np.sign(s_right)) & (s_left != 0.0) & (s_right != 0.0)
-    return np.where(monotone, d, 0.0)
+    return np.where(s_left * s_right > 0.0, d, 0.0)  # same sign, neither zero
 
 
 def _pchip_end_slope(h_near, h_far, s_near, s_far):
@@ -467,20 +478,22 @@ def _pchip_end_slope(h_near, h_far, s_near, s_far):
     scipy's shape-preserving three-point formula.
     """
     d = ((2.0 * h_near + h_far) * s_near - h_near * s_far) / (h_near + h_far)
-    d = np.where(np.sign(d) != np.sign(s_near), 0.0, d)
-    overshoot = (np.sign(s_near) != np.sign(s_far)) & (np.abs(d) > 3.0 * np.abs(s_near))
+    d = np.where(d * s_near > 0.0, d, 0.0)  # against the secant's sign, or zero: 0
+    # where the far secant changes sign (or is 0), at most 3 times the near one
+    overshoot = (s_near * s_far <= 0.0) & (np.abs(d) > 3.0 * np.abs(s_near))
     return np.where(overshoot, 3.0 * s_near, d)
 
 
 @np.errstate(divide="ignore", invalid="ignore", over="ignore")
-def _optical_depth_cubic(base, spectra, usable, x, t, on_node):
+def _optical_depth_cubic(base, low, high, beyond, usable, x, t, on_node):
     """``"optical-depth-cubic"`` values of TRANS, SURF_EMIS, GRND_RFLT (numpy kernel).
 
-    ``base`` is ``"same-elevation"``'s result (scenario, component, wavelength);
-    ``spectra`` the four tables' same-elevation spectra (lower outer, lower bracket,
-    upper bracket, upper outer), ``usable`` (scenario, 3) whether each outer table is
-    usable and whether the lower outer node is the ground, ``x`` (scenario, 4) the nodes'
-    optical-path coordinate and ``t`` the scenario's weight in it (``"same-elevation"``'s).
+    ``base`` is ``"same-elevation"``'s result (scenario, component, wavelength); ``low``
+    and ``high`` the bracketing tables' same-elevation spectra, ``beyond`` the
+    logarithms of the outer tables' (below, above); ``usable`` (scenario, 3) whether
+    each outer table is usable and whether the lower outer node is the ground; ``x``
+    (scenario, 4) the nodes' optical-path coordinate and ``t`` the scenario's weight in
+    it (``"same-elevation"``'s).
 
     The logarithm of each value (-ln TRANS is the line of sight's optical depth, 0 at
     the ground) is a monotone cubic Hermite (PCHIP) between the brackets with slopes
@@ -490,7 +503,7 @@ def _optical_depth_cubic(base, spectra, usable, x, t, on_node):
     no ground node. Returns ``low * exp(increment)``; on an altitude node, and where the
     result is not finite and positive (a zero bracketing value), ``base``.
     """
-    logs = [np.log(v) for v in spectra]
+    logs = (beyond[0], np.log(low), np.log(high), beyond[1])
     ground = usable[:, 2, None, None]
     along_trans = np.zeros(base.shape[1:], dtype=bool)
     along_trans[0] = True  # TRANS is the first of _ALONG_PATH
@@ -511,7 +524,7 @@ def _optical_depth_cubic(base, spectra, usable, x, t, on_node):
     w2, w3 = w * w, w * w * w
     step = ((w3 - 2.0 * w2 + w) * h1 * d1 + (-2.0 * w3 + 3.0 * w2) * rise
             + (w3 - w2) * h1 * d2)
-    value = spectra[1] * np.exp(step)
+    value = low * np.exp(step)
     good = ~on_node[:, None, None] & np.isfinite(value) & (value > 0.0)
     return np.where(good, value, base)
 
@@ -625,11 +638,11 @@ def _spectra_of(db, scenarios, interpolation, window):
         out[s][:, _ALONG_PATH] = _interp(low, high, weight[s], "log")
         if cubic is not None:
             tables, outer, x = cubic
-            beyond = [_interp(at(b[s], b0[s], _ALONG_PATH), at(b[s], b1[s], _ALONG_PATH),
-                          bw[s], "log") for b, b0, b1, bw in tables]
+            beyond = [_ln_interp(at(b[s], b0[s], _ALONG_PATH), at(b[s], b1[s], _ALONG_PATH),
+                                 bw[s]) for b, b0, b1, bw in tables]
             out[s][:, _ALONG_PATH] = _optical_depth_cubic(
-                out[s][:, _ALONG_PATH], (beyond[0], low, high, beyond[1]), outer[s],
-                x[s], weight[s], a0[s] == a1[s])
+                out[s][:, _ALONG_PATH], low, high, beyond, outer[s], x[s], weight[s],
+                a0[s] == a1[s])
         fallback = ~usable[s]
         if fallback.any():  # the fixed-range rule where the line of sight leaves a table
             block = out[s]
