@@ -7,7 +7,8 @@ with ``spacing=4`` three tables are removed and the neighbours are four times th
 real spacing apart. The real spacing itself has no truth between nodes; the ratio
 of the two gives the order of convergence to extrapolate to it.
 
-The ``xbsm`` rules ("linear", "log-linear", "same-elevation") run through the
+The ``xbsm`` rules ("linear", "log-linear", "same-elevation", "optical-depth-cubic") run
+through the
 package's own kernel on a copy of the database with the tables removed, so the
 numbers are those of ``atmosphere_at`` on such a database.
 
@@ -18,8 +19,9 @@ docs/atmosphere.md; see ``recipes/README.md``)::
     .venv/bin/python recipes/atmosphere_leave_one_out.py --candidates  # that table only
 
 The candidate rules (``CANDIDATES``) interpolate across altitude through more than the
-two bracketing tables; they are not in the package (none met the target; see
-docs/atmosphere.md).
+two bracketing tables; the first, "cubic, optical path H=2 km", is the package's
+"optical-depth-cubic" (the presets' rule; see docs/atmosphere.md), the others are not in
+the package.
 """
 
 from __future__ import annotations
@@ -182,7 +184,7 @@ def kernel_errors(db, axis: str, rule, wavelength_index, spacing=2, visibility=N
     return {name: np.concatenate(e) for name, e in errors.items()}
 
 
-KERNEL_RULES = ("linear", "log-linear", "same-elevation")
+KERNEL_RULES = ("linear", "log-linear", "same-elevation", "optical-depth-cubic")
 
 
 def _cell(err):
@@ -205,8 +207,11 @@ def print_rule_tables(db, wl):
 
 
 # --- Candidate altitude rules from more than two tables (issue 12) -------------------------
-# Not in the package: none met the target (docs/atmosphere.md, "More than two altitude
-# tables"). Each reads every altitude table up to 24.5 km along the scenario's line of
+# The first is the package's "optical-depth-cubic" (its prototype: the package reads only
+# the four tables of the stencil and, in the lowest interval, also uses the table above
+# for the slopes of SURF_EMIS and GRND_RFLT); the others are not in the package
+# (docs/atmosphere.md, "optical-depth-cubic").
+# Each reads every altitude table up to 24.5 km along the scenario's line of
 # sight, as "same-elevation" reads its two brackets, and interpolates across altitude
 # through the brackets and the tables beyond them (and the ground, where the optical
 # depth is 0), vectorised over scenarios and wavelengths.
@@ -404,7 +409,8 @@ CANDIDATES = {
 
 def print_candidate_tables(db, wl, axes=("altitude", "ground_range")):
     """``"same-elevation"`` and every candidate, 2x, TRANS, SURF_EMIS, GRND_RFLT."""
-    rules = {"same-elevation": "same-elevation", **CANDIDATES}
+    rules = {"same-elevation": "same-elevation", "optical-depth-cubic": "optical-depth-cubic",
+             **CANDIDATES}
     print("| axis | visibility | component | " + " | ".join(rules) + " |")
     print("|---" * (3 + len(rules)) + "|")
     for axis in axes:
@@ -453,7 +459,8 @@ def main() -> int:
           "percentile / max of |relative error|")
     print_rule_tables(db, wl)
     print()
-    print("Candidate altitude rules from more than two tables (not in the package), 2x: "
+    print("Candidate altitude rules from more than two tables (the first is the package's "
+          "optical-depth-cubic), 2x: "
           "median / 95th percentile / max of |relative error|")
     print_candidate_tables(db, wl)
     return 0

@@ -17,7 +17,7 @@ Interpolation between database nodes (``interpolation=``):
     The same two steps on the logarithm of each value (transmittance falls
     exponentially with path length), with the altitude weight linear in
     log(altitude); linear in the value where a bracketing value is zero.
-``"same-elevation"`` (default of the ``accurate`` and ``fast`` presets)
+``"same-elevation"``
     Transmittance, surface emission and ground-reflected radiance (the components
     attenuated along the path) are interpolated between the two altitude tables
     along paths of the same elevation angle at the target: each table is read,
@@ -28,6 +28,16 @@ Interpolation between database nodes (``interpolation=``):
     radiances use ``"log-linear"``. Where a same-elevation point leaves a table's
     coverage (the horizon, 300 km) and above 24.5 km the rule falls back to
     ``"log-linear"`` and sets the ``atmosphere_fallback`` flag (not at 24.5-550 km).
+``"optical-depth-cubic"`` (default of the ``accurate`` and ``fast`` presets)
+    As ``"same-elevation"``, but the logarithm of TRANS, SURF_EMIS and GRND_RFLT
+    (-ln TRANS is the line of sight's optical depth) is a monotone cubic (PCHIP
+    slopes) in the same optical-path coordinate through the two bracketing tables
+    and one more table beyond each, read at the same elevation angle; for TRANS the
+    ground (optical depth 0) is the node below the lowest table. An outer table
+    that is missing, above 24.5 km, beyond its coverage or zero (TRANS at the
+    database floor) gives a one-sided slope (the secant without either outer
+    table); the bracketing tables, the path radiances, the fallback and its flag
+    are ``"same-elevation"``'s, and so is the value where a bracketing value is zero.
 
 The leave-one-out errors behind these choices are in ``docs/atmosphere.md``.
 
@@ -98,12 +108,15 @@ _RULES = MappingProxyType({
     "linear": ("linear", "altitude", "linear"),
     "log-linear": ("log", "log_altitude", "log"),
     "same-elevation": ("log", "log_altitude", "log"),  # the path radiances and the fallback
+    "optical-depth-cubic": ("log", "log_altitude", "log"),  # likewise
 })
-#: Components that ``"same-elevation"`` interpolates along the line of sight (indices of
+#: Interpolations that follow the line of sight between altitude tables.
+_ALONG_SIGHT = ("same-elevation", "optical-depth-cubic")
+#: Components that the line-of-sight rules interpolate along it (indices of
 #: TRANS, SURF_EMIS, GRND_RFLT: attenuated along the path; the path radiances are not).
 _ALONG_PATH = (0, 2, 4)
 _ACROSS_PATH = (1, 3)  # PTH_THRML, SOL_SCAT: path radiances, at fixed ground range
-#: Scale height of the extinction profile behind the ``"same-elevation"`` altitude weight:
+#: Scale height of the extinction profile behind the line-of-sight rules' altitude coordinate:
 #: 2 km is the best of 0.5-3 km in the altitude leave-one-out (docs/atmosphere.md). [m]
 SCALE_HEIGHT = 2000.0
 #: Accepted values of ``interpolation``.
@@ -297,6 +310,18 @@ def _interp(low, high, weight, rule):
     return np.where(positive, logged, linear)
 
 
+def _ln_interp(low, high, weight):
+    """Natural logarithm of ``_interp(low, high, weight, "log")``, without its exp."""
+    w = weight[:, None, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ln_low, ln_high = np.log(low), np.log(high)
+        out = ln_low + w * (ln_high - ln_low)
+        linear = ~((low > 0.0) & (high > 0.0))
+        if linear.any():
+            np.log((1.0 - w) * low + w * high, out=out, where=linear)
+    return out
+
+
 def _nearest_nodes(value, nodes):
     """Text naming the database nodes on either side of ``value``."""
     i = int(np.searchsorted(nodes, value))
@@ -399,6 +424,111 @@ def _same_elevation(altitude, ground_range, vis, alt, db):
     return brackets, weight, usable
 
 
+def _outer_tables(altitude, ground_range, vis, alt, db):
+    """The tables beyond the two brackets that ``"optical-depth-cubic"`` reads (numpy kernel).
+
+    Returns, for the table below the lower bracket and the table above the upper one,
+    its altitude index and ground-range bracket at the scenario's target elevation
+    angle; where each is usable (it exists below 24.5 km, its same-elevation point is
+    inside its coverage and both its spectra exist); whether the lower outer node is the
+    ground (the lower bracket is the lowest table); and the optical-path coordinate of
+    the four nodes (-:func:`_optical_path_above`, increasing with altitude).
+    """
+    a0, a1, _ = alt
+    elevation = target_elevation_angle(slant_range(ground_range, altitude), altitude)
+    sin_e, cos_e = np.sin(elevation), np.cos(elevation)
+    last = db.ground_range[-1]
+    ground = a0 == 0
+    above = a1 + 1
+    exists = (~ground, (above < db.altitude.size)
+              & (db.altitude[np.minimum(above, db.altitude.size - 1)] <= _GAP[0]))
+    tables, covered = [], []
+    # an outer table without a same-elevation point (beyond the horizon or 300 km, no
+    # entry) is left out: the cubic uses fewer tables (a one-sided slope). Where a
+    # bracketing table has none, the scenario falls back as "same-elevation" does.
+    for index, ok in zip((a0 - 1, above), exists, strict=True):
+        a = np.clip(index, 0, db.altitude.size - 1)
+        node = db.altitude[a]
+        g = np.where(ground_range == 0.0, ground_range,
+                     _ground_range_at_elevation(sin_e, cos_e, node))
+        g0, g1, wg = _bracket(np.minimum(g, last), db.ground_range)
+        covered.append(ok & (elevation > 0.0) & (g <= last) & db.present[vis, a, g0]
+                       & db.present[vis, a, g1])
+        tables.append((a, g0, g1, wg))
+    heights = (np.where(ground, 0.0, db.altitude[np.maximum(a0 - 1, 0)]), db.altitude[a0],
+               db.altitude[a1], db.altitude[np.minimum(above, db.altitude.size - 1)])
+    x = np.stack([-_optical_path_above(h, sin_e) for h in heights], axis=1)
+    return tables, np.stack([*covered, ground], axis=1), x
+
+
+def _pchip_interior_slope(h_left, h_right, s_left, s_right):
+    """PCHIP derivative at a node between two intervals (numpy kernel).
+
+    The Fritsch-Butland weighted harmonic mean of the secants (scipy's); 0 at a local
+    extremum.
+    """
+    w1, w2 = 2.0 * h_right + h_left, h_right + 2.0 * h_left
+    d = (w1 + w2) / (w1 / s_left + w2 / s_right)
+    return np.where(s_left * s_right > 0.0, d, 0.0)  # same sign, neither zero
+
+
+def _pchip_end_slope(h_near, h_far, s_near, s_far):
+    """PCHIP derivative at the end node of two intervals (numpy kernel).
+
+    scipy's shape-preserving three-point formula.
+    """
+    d = ((2.0 * h_near + h_far) * s_near - h_near * s_far) / (h_near + h_far)
+    d = np.where(d * s_near > 0.0, d, 0.0)  # against the secant's sign, or zero: 0
+    # where the far secant changes sign (or is 0), at most 3 times the near one
+    overshoot = (s_near * s_far <= 0.0) & (np.abs(d) > 3.0 * np.abs(s_near))
+    return np.where(overshoot, 3.0 * s_near, d)
+
+
+@np.errstate(divide="ignore", invalid="ignore", over="ignore")
+def _optical_depth_cubic(base, low, high, beyond, usable, x, t, on_node):
+    """``"optical-depth-cubic"`` values of TRANS, SURF_EMIS, GRND_RFLT (numpy kernel).
+
+    ``base`` is ``"same-elevation"``'s result (scenario, component, wavelength); ``low``
+    and ``high`` the bracketing tables' same-elevation spectra, ``beyond`` the
+    logarithms of the outer tables' (below, above); ``usable`` (scenario, 3) whether
+    each outer table is usable and whether the lower outer node is the ground; ``x``
+    (scenario, 4) the nodes' optical-path coordinate and ``t`` the scenario's weight in
+    it (``"same-elevation"``'s).
+
+    The logarithm of each value (-ln TRANS is the line of sight's optical depth, 0 at
+    the ground) is a monotone cubic Hermite (PCHIP) between the brackets with slopes
+    from the outer nodes: one-sided where an outer node is missing, unusable or has a
+    zero value (TRANS at the database floor), the secant without either. For TRANS the
+    ground is the lower outer node below the lowest table; SURF_EMIS and GRND_RFLT have
+    no ground node. Returns ``low * exp(increment)``; on an altitude node, and where the
+    result is not finite and positive (a zero bracketing value), ``base``.
+    """
+    logs = (beyond[0], np.log(low), np.log(high), beyond[1])
+    ground = usable[:, 2, None, None]
+    along_trans = np.zeros(base.shape[1:], dtype=bool)
+    along_trans[0] = True  # TRANS is the first of _ALONG_PATH
+    y0 = np.where(ground & along_trans, 0.0, logs[0])
+    y1, y2, y3 = logs[1:]
+    left = np.where(along_trans, usable[:, 0, None, None] | ground,
+                    usable[:, 0, None, None]) & np.isfinite(y0)
+    right = usable[:, 1, None, None] & np.isfinite(y3)
+    X = [x[:, k, None, None] for k in range(4)]
+    h0, h1, h2 = X[1] - X[0], X[2] - X[1], X[3] - X[2]
+    rise = y2 - y1
+    s0, s1, s2 = (y1 - y0) / h0, rise / h1, (y3 - y2) / h2
+    d1 = np.where(left, _pchip_interior_slope(h0, h1, s0, s1),
+                  np.where(right, _pchip_end_slope(h1, h2, s1, s2), s1))
+    d2 = np.where(right, _pchip_interior_slope(h1, h2, s1, s2),
+                  np.where(left, _pchip_end_slope(h1, h0, s1, s0), s1))
+    w = t[:, None, None]
+    w2, w3 = w * w, w * w * w
+    step = ((w3 - 2.0 * w2 + w) * h1 * d1 + (-2.0 * w3 + 3.0 * w2) * rise
+            + (w3 - w2) * h1 * d2)
+    value = low * np.exp(step)
+    good = ~on_node[:, None, None] & np.isfinite(value) & (value > 0.0)
+    return np.where(good, value, base)
+
+
 def _scenarios(altitude, ground_range, visibility, interpolation, db):
     """Validated flat inputs with their brackets and same-elevation brackets.
 
@@ -416,9 +546,13 @@ def _scenarios(altitude, ground_range, visibility, interpolation, db):
     (a0, a1, _), (g0, g1, _), p = alt, gr, db.present
     complete = p[vis, a0, g0] & p[vis, a1, g0] & p[vis, a0, g1] & p[vis, a1, g1]
     along = None
-    if interpolation == "same-elevation":
+    if interpolation in _ALONG_SIGHT:
         brackets, weight, usable = _same_elevation(altitude, ground_range, vis, alt, db)
-        along = (brackets, weight, usable & complete)  # never finite where others are NaN
+        cubic = None
+        if interpolation == "optical-depth-cubic":
+            cubic = _outer_tables(altitude, ground_range, vis, alt, db)
+        # never finite where others are NaN
+        along = (brackets, weight, usable & complete, cubic)
     return shape, altitude, vis, alt, gr, complete, along
 
 
@@ -495,13 +629,20 @@ def _spectra_of(db, scenarios, interpolation, window):
         if along is None:
             out[s] = fixed_range(all_components)
             continue
-        ((l0, l1, lw), (h0, h1, hw)), weight, usable = along
+        ((l0, l1, lw), (h0, h1, hw)), weight, usable, cubic = along
         out[s][:, _ACROSS_PATH] = fixed_range(_ACROSS_PATH)
         # ground range inside each table first, then altitude along the line of sight
-        out[s][:, _ALONG_PATH] = _two_steps(
-            (at(a0[s], l0[s], _ALONG_PATH), at(a0[s], l1[s], _ALONG_PATH)),
-            (at(a1[s], h0[s], _ALONG_PATH), at(a1[s], h1[s], _ALONG_PATH)),
-            (lw[s], hw[s]), weight[s], ("log", "log"))
+        low = _interp(at(a0[s], l0[s], _ALONG_PATH), at(a0[s], l1[s], _ALONG_PATH), lw[s], "log")
+        high = _interp(at(a1[s], h0[s], _ALONG_PATH), at(a1[s], h1[s], _ALONG_PATH), hw[s],
+                       "log")
+        out[s][:, _ALONG_PATH] = _interp(low, high, weight[s], "log")
+        if cubic is not None:
+            tables, outer, x = cubic
+            beyond = [_ln_interp(at(b[s], b0[s], _ALONG_PATH), at(b[s], b1[s], _ALONG_PATH),
+                                 bw[s]) for b, b0, b1, bw in tables]
+            out[s][:, _ALONG_PATH] = _optical_depth_cubic(
+                out[s][:, _ALONG_PATH], low, high, beyond, outer[s], x[s], weight[s],
+                a0[s] == a1[s])
         fallback = ~usable[s]
         if fallback.any():  # the fixed-range rule where the line of sight leaves a table
             block = out[s]
@@ -552,8 +693,9 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation="log-line
         Ground range from the sensor nadir point to the target, within [0, 300000]. [m]
     visibility : float or xr.DataArray
         Meteorological range: 23 (MODTRAN IHAZE 1) or 5 (IHAZE 2). [km]
-    interpolation : {"log-linear", "linear", "exact"}
-        Rule between database nodes; see the module docstring.
+    interpolation : {"log-linear", "linear", "exact", "same-elevation", "optical-depth-cubic"}
+        Rule between database nodes; see the module docstring. The model's presets
+        use "optical-depth-cubic" (``accurate``, ``fast``) and "linear" (``pybsm``).
     wavelength_bounds : tuple of float, optional
         ``(lo, hi)``: keep the database wavelengths ``lo <= w <= hi`` (exact float
         comparison, as pyBSM selects a band); only these are interpolated. [m]
@@ -567,7 +709,8 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation="log-line
         ``solar_scatter``, ``ground_reflected`` [W m-2 sr-1 m-1] on the union of
         the input dimensions plus ``wavelength``, and int32 ``flags`` (CF flag
         variable; ``beyond_database`` where the spectra are NaN,
-        ``atmosphere_sparse`` between 24.5 km and 550 km).
+        ``atmosphere_sparse`` between 24.5 km and 550 km, ``atmosphere_fallback``
+        where a line-of-sight rule fell back to ``"log-linear"``).
 
     Raises
     ------
