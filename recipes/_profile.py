@@ -21,6 +21,7 @@ import os
 import pstats
 import sys
 import time
+import warnings
 from collections import defaultdict
 from pathlib import Path
 
@@ -67,7 +68,7 @@ def attribute(stats):
     sparse linear solve.
     """
     from scipy.sparse import coo_matrix, identity
-    from scipy.sparse.linalg import spsolve
+    from scipy.sparse.linalg import MatrixRankWarning, spsolve
 
     raw = stats.stats  # {func: (cc, nc, tt, ct, {caller: (nc, cc, tt, ct)})}
     kind = {}
@@ -152,7 +153,14 @@ def attribute(stats):
         for row, seconds in source.items():
             s[row] = seconds
         # seconds passing through each state: (I - P)^T m = s
-        mass = spsolve((identity(n, format="csc") - transition).T.tocsc(), s)
+        system = (identity(n, format="csc") - transition).T.tocsc()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", MatrixRankWarning)
+            mass = spsolve(system, s)
+        if not np.all(np.isfinite(mass)):
+            # a recursion seen in one call only (deepcopy's own cycle) leaves the chain
+            # without an exit there: the least-squares solution of the same equations
+            mass = np.linalg.lstsq(system.toarray(), s, rcond=None)[0]
         totals = absorb.T @ mass
         for bucket, col in buckets.items():
             out[bucket] += float(totals[col])
