@@ -58,6 +58,8 @@ def inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> dict | None:
             if not _OWN_DIMS.issuperset(variable.dims):
                 return None
             values[name] = data
+    if sensor.variables["filter_kernel"].dims != ("kernel_y", "kernel_x"):
+        return None  # an edited kernel in the other order: the labelled chain transposes it
     for name, units in _ATMOSPHERE_UNITS:
         if scenario.variables[name].attrs.get("units", units) != units:
             return None
@@ -213,10 +215,10 @@ def _otf_band(weights, wavelength, count: int):
 def _filter(p: dict, fx, fy, m):
     """The post-processing filter OTF on the slices (``otf.system._filter``)."""
     kernel = p["filter_kernel"]
-    identity = kernel.shape == (1, 1) and kernel[0, 0] == 1.0
-    if identity or (m.filter_otf == "pybsm" and kernel.shape[0] == 1):
+    rule = system._filter_rule(kernel, m.filter_otf)
+    if rule is None:
         return np.ones(fx.shape)
-    if m.filter_otf == "pybsm":
+    if rule == "pybsm":
         return filters._pybsm_filter_kernel(fx, fy, kernel=kernel,
                                             ifov=p["pixel_pitch_x"] / p["focal_length"])
     return system._sampled_filter_kernel(fy, p["pixel_pitch_y"], p["focal_length"], fx,
@@ -275,8 +277,8 @@ def _edges(p: dict, m, signal: dict, cutoff, ifov, time, slant) -> dict:
         unfiltered)[0]
     coarse = False
     if m.edge_rule == "uniform_trapezoid":
-        oscillations = cutoff * max(ifov) * quadrature.MAX_POSITION
-        coarse = nodes.size / oscillations < m.undersampling_threshold
+        samples = quadrature._samples_per_oscillation_kernel(nodes.size, cutoff, max(ifov))
+        coarse = samples < m.undersampling_threshold
     rer = np.sqrt(rer_x * rer_y)
     flags = (np.where(coarse, fl.flag("undersampled_grid"), 0)
              | np.where(rer < quadrature.UNRESOLVED_RER, fl.flag("blur_unresolved"), 0))
@@ -306,12 +308,9 @@ def _giqe(p: dict, m, calibration, e: dict, snr, view: dict) -> dict:
         {"snr": snr, "rer": e["rer"], "gsd": gsd_gp, "elevation": elevation, "niirs": niirs},
         {"snr": snr, "rer": rer5, "gsd": gsd_w, "gsd_ground_plane": gsd5_gp,
          "elevation": elevation, "q": q, "niirs": niirs})
-    arrays, tests = [], []
-    for i, (version, values) in enumerate(zip(giqe.GIQE_VERSIONS, tested, strict=True)):
-        version_arrays, version_tests = giqe._version_tests(calibration[version], values, i, i)
-        tests += [(*t[:5], t[5] + len(arrays), t[6]) for t in version_tests]
-        arrays += [np.asarray(getattr(a, "values", a)) for a in version_arrays]
-    flags = giqe._flags_kernel(*arrays, tests=tests, versions=len(giqe.GIQE_VERSIONS))
+    arrays, tests, _ = giqe._tests_by_version(calibration, tested)
+    flags = giqe._flags_kernel(*(np.asarray(getattr(a, "values", a)) for a in arrays),
+                               tests=tests, versions=len(giqe.GIQE_VERSIONS))
     return {"niirs": niirs, "giqe_flags": flags, "rer_giqe5": rer5, "gsd": gsd,
             "gsd_gp": gsd_gp, "gsd_w": gsd_w, "noise_gain": gain}
 

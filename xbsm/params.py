@@ -67,10 +67,15 @@ class Spec:
 
     def violated(self, values: np.ndarray) -> np.ndarray:
         """Boolean mask of values outside the interval (NaN counts as outside)."""
-        values = np.asarray(values, dtype=float)
-        below = values <= self.low if self.low_open else values < self.low
-        above = values >= self.high if self.high_open else values > self.high
-        return below | above | np.isnan(values)
+        return _outside(np.asarray(values, dtype=float), self.low, self.high, self.low_open,
+                        self.high_open)
+
+
+def _outside(values, low, high, low_open, high_open) -> np.ndarray:
+    """Where ``values`` leave their intervals (NaN counts as outside); the bounds broadcast."""
+    below = np.where(low_open, values <= low, values < low)
+    above = np.where(high_open, values >= high, values > high)
+    return below | above | np.isnan(values)
 
 
 POSITIVE = {"low": 0.0, "low_open": True}
@@ -692,8 +697,7 @@ def _check_parameters(kind: str, variables, specs) -> None:
     low, high, low_open, high_open = _bounds(kind, specs)
     flat = np.array([v.values if s else np.nan for v, s in zip(values, scalar, strict=True)],
                     dtype=float)
-    outside = (np.where(low_open, flat <= low, flat < low)
-               | np.where(high_open, flat >= high, flat > high) | np.isnan(flat))
+    outside = _outside(flat, low, high, low_open, high_open)
     for (name, spec), value, is_scalar, bad in zip(specs.items(), values, scalar, outside,
                                                    strict=True):
         if is_scalar:

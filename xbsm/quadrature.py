@@ -441,6 +441,11 @@ def edge_nodes(cutoff, ifov_x, ifov_y, **knobs):
     return nodes_da, weights_da
 
 
+def _samples_per_oscillation_kernel(count, cutoff, ifov_max):
+    """Nodes per period of the edge-response integrand at the farthest position (numpy)."""
+    return count / (cutoff * ifov_max * MAX_POSITION)
+
+
 def samples_per_oscillation(nodes, cutoff, ifov_x, ifov_y):
     """Frequency samples per period of the edge-response integrand at 3 px.
 
@@ -458,8 +463,9 @@ def samples_per_oscillation(nodes, cutoff, ifov_x, ifov_y):
     xr.DataArray
         [1]
     """
-    oscillations = cutoff * np.maximum(ifov_x, ifov_y) * MAX_POSITION
-    return named(nodes.sizes["frequency"] / oscillations, "1",
+    samples = _samples_per_oscillation_kernel(nodes.sizes["frequency"], cutoff,
+                                              np.maximum(ifov_x, ifov_y))
+    return named(samples, "1",
                  "frequency samples per period of the edge-response integrand at 3 px")
 
 

@@ -771,6 +771,21 @@ def giqe_by_version(*, rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noi
     })
 
 
+def _tests_by_version(calibration, tested):
+    """Every GIQE version's tested arrays and tests, numbered for one :func:`_flags_kernel`.
+
+    ``tested[i]`` holds what version ``GIQE_VERSIONS[i]`` tests (its NIIRS being column i
+    of the ``niirs`` over ``giqe``). Returns (arrays, tests, the version index of each).
+    """
+    arrays, tests, versions = [], [], []
+    for i, (version, values) in enumerate(zip(GIQE_VERSIONS, tested, strict=True)):
+        version_arrays, version_tests = _version_tests(calibration[version], values, i, i)
+        tests += [(*t[:5], t[5] + len(arrays), t[6]) for t in version_tests]
+        arrays += version_arrays
+        versions += [i] * len(version_arrays)
+    return arrays, tests, versions
+
+
 def _flags_by_version(calibration, tested, niirs_dims):
     """The flags of every GIQE version along ``giqe`` from one kernel call.
 
@@ -778,17 +793,14 @@ def _flags_by_version(calibration, tested, niirs_dims):
     the ``niirs`` over ``giqe``); the result's dims are in the order in which the versions'
     tests meet them, ``giqe`` first, as if each version were flagged alone and concatenated.
     """
-    arrays, tests, order = [], [], []
-    for i, (version, values) in enumerate(zip(GIQE_VERSIONS, tested, strict=True)):
-        version_arrays, version_tests = _version_tests(calibration[version], values, i, i)
-        tests += [(*t[:5], t[5] + len(arrays), t[6]) for t in version_tests]
-        arrays += version_arrays
-        for array, test in zip(version_arrays, version_tests, strict=True):
-            if test[6] is not None:  # this version's NIIRS
-                order += [a.dims for a in niirs_dims[i]]
-            else:  # q's any-orientation test drops orientation
-                core = "orientation" if test[2] == "any_outside" else None
-                order.append([d for d in array.dims if d != core])
+    arrays, tests, versions = _tests_by_version(calibration, tested)
+    order = []
+    for i, array, test in zip(versions, arrays, tests, strict=True):
+        if test[6] is not None:  # this version's NIIRS
+            order += [a.dims for a in niirs_dims[i]]
+        else:  # q's any-orientation test drops orientation
+            core = "orientation" if test[2] == "any_outside" else None
+            order.append([d for d in array.dims if d != core])
     flags = _label_flags(arrays, tests, versions=len(GIQE_VERSIONS))
     dims = ("giqe", *_dims_in_order(*order))
     dims = tuple(d for d in dims if d in flags.dims)

@@ -248,15 +248,22 @@ def _sampled_filter_kernel(fy, pixel_pitch_y, focal_length, fx, pixel_pitch_x, *
                                        pixel_pitch_x / focal_length, kernel=kernel)
 
 
+def _filter_rule(kernel: np.ndarray, filter_otf: str):
+    """How the filter OTF is made: ``filter_otf``, or None for exactly 1 (no filter).
+
+    ``kernel`` is (kernel_y, kernel_x). pyBSM 0.16.1 skips kernels with a single row
+    (common_OTFs: shape[0] > 1).
+    """
+    identity = kernel.shape == (1, 1) and kernel[0, 0] == 1.0
+    return None if identity or (filter_otf == "pybsm" and kernel.shape[0] == 1) else filter_otf
+
+
 def _filter(sensor, fx, fy, method: Method):
     """The post-processing filter OTF, or exactly 1 when there is no filter."""
-    kernel = sensor["filter_kernel"]
-    identity = kernel.shape == (1, 1) and float(kernel[0, 0]) == 1.0
-    # pyBSM 0.16.1 skips kernels with a single row (common_OTFs: shape[0] > 1)
-    pybsm_skips = method.filter_otf == "pybsm" and kernel.sizes["kernel_y"] == 1
-    if identity or pybsm_skips:
+    k = np.asarray(sensor["filter_kernel"].transpose("kernel_y", "kernel_x").values,
+                   dtype=float)
+    if _filter_rule(k, method.filter_otf) is None:
         return apply_kernel(_ones_kernel, fx, fy)
-    k = np.asarray(kernel.values, dtype=float)
     pitch_x, pitch_y, focal = (sensor[n] for n in ("pixel_pitch_x", "pixel_pitch_y",
                                                    "focal_length"))
     if method.filter_otf == "pybsm":
