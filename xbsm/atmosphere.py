@@ -54,6 +54,7 @@ import functools
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
+from typing import NamedTuple
 
 import netCDF4
 import numpy as np
@@ -281,7 +282,7 @@ def _bracket(values, nodes, log=False):
     The weight is ``(x - x0) / (x1 - x0)``, pyBSM's expression, with ``x`` the
     value itself or, if ``log``, its logarithm.
     """
-    lower = np.clip(np.searchsorted(nodes, values, side="right") - 1, 0, nodes.size - 1)
+    lower = np.maximum(np.searchsorted(nodes, values, side="right") - 1, 0)  # <= size - 1
     on_node = nodes[lower] == values
     upper = np.where(on_node, lower, np.minimum(lower + 1, nodes.size - 1))
     x, x0, x1 = values, nodes[lower], nodes[upper]
@@ -299,20 +300,21 @@ def _interp(low, high, weight, rule):
     Log: ``low * exp(w * (log(high) - log(low)))`` where both are positive, which
     returns ``low`` exactly when ``w == 0`` or ``high is low``; linear elsewhere.
     """
-    w = weight[:, None, None]
-    linear = (1.0 - w) * low + w * high
+    w = weight[..., None, None]
     if rule == "linear":
-        return linear
+        return (1.0 - w) * low + w * high
     positive = (low > 0.0) & (high > 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         log_step = np.log(high) - np.log(low)
         logged = low * np.exp(w * log_step)
-    return np.where(positive, logged, linear)
+    if positive.all():
+        return logged
+    return np.where(positive, logged, (1.0 - w) * low + w * high)
 
 
 def _ln_interp(low, high, weight):
     """Natural logarithm of ``_interp(low, high, weight, "log")``, without its exp."""
-    w = weight[:, None, None]
+    w = weight[..., None, None]
     with np.errstate(divide="ignore", invalid="ignore"):
         ln_low, ln_high = np.log(low), np.log(high)
         out = ln_low + w * (ln_high - ln_low)
@@ -397,68 +399,70 @@ def _optical_path_above(altitude, sin_elevation):
     return erfcx(np.sqrt(inside)) * np.exp(-altitude / SCALE_HEIGHT)
 
 
-def _same_elevation(altitude, ground_range, vis, alt, db):
-    """Brackets of the line of sight in both altitude tables, and its altitude weight.
+class _Sight(NamedTuple):
+    """The line-of-sight rules' tables of each scenario (numpy arrays).
 
-    Returns the ground-range brackets in both tables at the scenario's target
-    elevation angle, the altitude weight, and where every bracketing spectrum exists
-    (numpy kernel).
+    ``tables`` holds the altitude index and the ground-range bracket ``(a, g0, g1, wg)``,
+    each (scenario, table), of the tables read at the scenario's target elevation angle:
+    the lower and upper brackets, then for ``"optical-depth-cubic"`` the table below and
+    the table above them. ``weight`` is the scenario's altitude weight in the
+    optical-path coordinate, ``usable`` where both brackets can be read along the line of
+    sight. For the cubic, ``outer`` (scenario, 3) says whether each outer table is usable
+    and whether the lower outer node is the ground, and ``x`` (scenario, 4) is the
+    optical-path coordinate of the four nodes; both None for ``"same-elevation"``.
+    """
+
+    tables: tuple
+    weight: np.ndarray
+    usable: np.ndarray
+    outer: np.ndarray | None
+    x: np.ndarray | None
+
+    def block(self, s: slice) -> _Sight:
+        """The scenarios ``s`` of every field."""
+        return _Sight(tuple(t[s] for t in self.tables), self.weight[s], self.usable[s],
+                      *(None if f is None else f[s] for f in (self.outer, self.x)))
+
+
+def _along_sight(altitude, ground_range, vis, alt, db, cubic):
+    """Tables, weight and usability of the line-of-sight rules (numpy kernel).
+
+    Each table is read where a sensor at its altitude sees the target at the scenario's
+    elevation angle (on an altitude node and at nadir, at the scenario's own ground
+    range). A bracketing table without such a point (beyond the horizon or the
+    coverage, no entry) makes the scenario fall back to the fixed-range rule; an outer
+    table without one, or missing (below the lowest table, above 24.5 km), is left
+    out of the cubic (a one-sided slope).
     """
     a0, a1, _ = alt
+    top = db.altitude.size - 1
     elevation = target_elevation_angle(slant_range(ground_range, altitude), altitude)
-    sin_e, cos_e = np.sin(elevation), np.cos(elevation)
-    usable = (elevation > 0.0) & (db.altitude[a1] <= _GAP[0])
-    brackets = []
-    for a in (a0, a1):
-        node = db.altitude[a]
-        same = (node == altitude) | (ground_range == 0.0)  # exact on a node and at nadir
-        g = np.where(same, ground_range, _ground_range_at_elevation(sin_e, cos_e, node))
-        usable &= g <= db.ground_range[-1]
-        g0, g1, wg = _bracket(np.minimum(g, db.ground_range[-1]), db.ground_range)
-        usable &= db.present[vis, a, g0] & db.present[vis, a, g1]
-        brackets.append((g0, g1, wg))
-    path0, path, path1 = (_optical_path_above(h, sin_e)
-                          for h in (db.altitude[a0], altitude, db.altitude[a1]))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        weight = np.where(a0 == a1, 0.0, (path0 - path) / (path0 - path1))
-    return brackets, weight, usable
-
-
-def _outer_tables(altitude, ground_range, vis, alt, db):
-    """The tables beyond the two brackets that ``"optical-depth-cubic"`` reads (numpy kernel).
-
-    Returns, for the table below the lower bracket and the table above the upper one,
-    its altitude index and ground-range bracket at the scenario's target elevation
-    angle; where each is usable (it exists below 24.5 km, its same-elevation point is
-    inside its coverage and both its spectra exist); whether the lower outer node is the
-    ground (the lower bracket is the lowest table); and the optical-path coordinate of
-    the four nodes (-:func:`_optical_path_above`, increasing with altitude).
-    """
-    a0, a1, _ = alt
-    elevation = target_elevation_angle(slant_range(ground_range, altitude), altitude)
-    sin_e, cos_e = np.sin(elevation), np.cos(elevation)
+    sin_e, cos_e = np.sin(elevation)[:, None], np.cos(elevation)[:, None]
+    index = np.stack((a0, a1, a0 - 1, a1 + 1) if cubic else (a0, a1), axis=1)
+    a = np.minimum(np.maximum(index, 0), top)
+    node = db.altitude[a]
+    same = (node == altitude[:, None]) | (ground_range == 0.0)[:, None]
+    g = np.where(same, ground_range[:, None], _ground_range_at_elevation(sin_e, cos_e, node))
     last = db.ground_range[-1]
+    g0, g1, wg = _bracket(np.minimum(g, last), db.ground_range)
+    covered = ((g <= last) & db.present[vis[:, None], a, g0] & db.present[vis[:, None], a, g1]
+               & (elevation > 0.0)[:, None])
+    usable = covered[:, 0] & covered[:, 1] & (db.altitude[a1] <= _GAP[0])
+    # optical path above each node: lower bracket, the scenario, upper bracket (, below,
+    # above; the ground is the lower outer node below the lowest table)
+    heights = [node[:, 0], altitude, node[:, 1]]
     ground = a0 == 0
-    above = a1 + 1
-    exists = (~ground, (above < db.altitude.size)
-              & (db.altitude[np.minimum(above, db.altitude.size - 1)] <= _GAP[0]))
-    tables, covered = [], []
-    # an outer table without a same-elevation point (beyond the horizon or 300 km, no
-    # entry) is left out: the cubic uses fewer tables (a one-sided slope). Where a
-    # bracketing table has none, the scenario falls back as "same-elevation" does.
-    for index, ok in zip((a0 - 1, above), exists, strict=True):
-        a = np.clip(index, 0, db.altitude.size - 1)
-        node = db.altitude[a]
-        g = np.where(ground_range == 0.0, ground_range,
-                     _ground_range_at_elevation(sin_e, cos_e, node))
-        g0, g1, wg = _bracket(np.minimum(g, last), db.ground_range)
-        covered.append(ok & (elevation > 0.0) & (g <= last) & db.present[vis, a, g0]
-                       & db.present[vis, a, g1])
-        tables.append((a, g0, g1, wg))
-    heights = (np.where(ground, 0.0, db.altitude[np.maximum(a0 - 1, 0)]), db.altitude[a0],
-               db.altitude[a1], db.altitude[np.minimum(above, db.altitude.size - 1)])
-    x = np.stack([-_optical_path_above(h, sin_e) for h in heights], axis=1)
-    return tables, np.stack([*covered, ground], axis=1), x
+    if cubic:
+        heights += [np.where(ground, 0.0, node[:, 2]), node[:, 3]]
+    path = _optical_path_above(np.stack(heights, axis=1), sin_e)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        weight = np.where(a0 == a1, 0.0, (path[:, 0] - path[:, 1]) / (path[:, 0] - path[:, 2]))
+    if not cubic:
+        return _Sight((a, g0, g1, wg), weight, usable, None, None)
+    exists = (~ground, (index[:, 3] <= top) & (node[:, 3] <= _GAP[0]))
+    outer = np.stack((exists[0] & covered[:, 2], exists[1] & covered[:, 3], ground), axis=1)
+    x = -path[:, [3, 0, 2, 4]]
+    return _Sight((a, g0, g1, wg), weight, usable, outer, x)
 
 
 def _pchip_interior_slope(h_left, h_right, s_left, s_right):
@@ -530,10 +534,10 @@ def _optical_depth_cubic(base, low, high, beyond, usable, x, t, on_node):
 
 
 def _scenarios(altitude, ground_range, visibility, interpolation, db):
-    """Validated flat inputs with their brackets and same-elevation brackets.
+    """Validated flat inputs with their brackets and line-of-sight tables.
 
-    Also where all four fixed-range tables exist; the same-elevation part is None for
-    other rules.
+    Also where all four fixed-range tables exist; the line-of-sight part (a
+    :class:`_Sight`, its ``usable`` also requiring those four) is None for other rules.
     """
     altitude, ground_range, visibility = (
         np.asarray(a, dtype=np.float64) for a in
@@ -547,12 +551,10 @@ def _scenarios(altitude, ground_range, visibility, interpolation, db):
     complete = p[vis, a0, g0] & p[vis, a1, g0] & p[vis, a0, g1] & p[vis, a1, g1]
     along = None
     if interpolation in _ALONG_SIGHT:
-        brackets, weight, usable = _same_elevation(altitude, ground_range, vis, alt, db)
-        cubic = None
-        if interpolation == "optical-depth-cubic":
-            cubic = _outer_tables(altitude, ground_range, vis, alt, db)
+        along = _along_sight(altitude, ground_range, vis, alt, db,
+                             cubic=interpolation == "optical-depth-cubic")
         # never finite where others are NaN
-        along = (brackets, weight, usable & complete, cubic)
+        along = along._replace(usable=along.usable & complete)
     return shape, altitude, vis, alt, gr, complete, along
 
 
@@ -563,20 +565,9 @@ def _flags_of(scenarios):
     sparse = (altitude > _GAP[0]) & (altitude < _GAP[1])
     out |= np.where(sparse, flag("atmosphere_sparse"), 0)
     if along is not None:
-        fallback = complete & ~along[2] & (altitude <= _GAP[0])
+        fallback = complete & ~along.usable & (altitude <= _GAP[0])
         out |= np.where(fallback, flag("atmosphere_fallback"), 0)
     return out.astype(np.int32).reshape(shape)
-
-
-def _two_steps(pair_low, pair_high, first, second, rules):
-    """Interpolate two pairs, then the two results.
-
-    Each pair with its weight in ``first``, the results with ``second``; ``rules``
-    names the rule of each step.
-    """
-    low = _interp(*pair_low, first[0], rules[0])
-    high = _interp(*pair_high, first[1], rules[0])
-    return _interp(low, high, second, rules[1])
 
 
 def _atmosphere_kernel(altitude, ground_range, visibility, wavelength, *, path, interpolation,
@@ -601,53 +592,71 @@ def _interpolate_database(db, altitude, ground_range, visibility, interpolation,
     return _spectra_of(db, scenarios, interpolation, window)
 
 
+def _gather(cube, vis, a, g, components):
+    """Spectra (..., component, wavelength) of the tables ``(vis, a, g)`` as float64.
+
+    ``a`` and ``g`` may carry a leading axis of tables before the scenario axis.
+    """
+    spectra = cube[vis, a, g]  # whole (component, wavelength) blocks: the fastest gather
+    if components is not None:
+        spectra = spectra[..., components, :]
+    return spectra.astype(np.float64)
+
+
+def _fixed_range(cube, vis, alt, gr, rules, components=None):
+    """Altitude at both bracketing ground ranges first, then ground range (pyBSM's order)."""
+    (a0, a1, wa), (g0, g1, wg) = alt, gr
+    ranges = np.stack((g0, g1))
+    by_range = _interp(_gather(cube, vis, a0, ranges, components),
+                       _gather(cube, vis, a1, ranges, components), np.stack((wa, wa)), rules[0])
+    return _interp(by_range[0], by_range[1], wg, rules[1])
+
+
+def _line_of_sight(cube, vis, sight, base_rules):
+    """TRANS, SURF_EMIS, GRND_RFLT of the line-of-sight rules (numpy kernel).
+
+    Ground range log-linear inside each table, then altitude along the line of sight:
+    log-linear in the optical-path coordinate (``"same-elevation"``) or the cubic
+    (``"optical-depth-cubic"``, :func:`_optical_depth_cubic`).
+    """
+    a, g0, g1, wg = (t.T for t in sight.tables)  # (table, scenario)
+    brackets = slice(0, 2)
+    low, high = _interp(_gather(cube, vis, a[brackets], g0[brackets], _ALONG_PATH),
+                        _gather(cube, vis, a[brackets], g1[brackets], _ALONG_PATH),
+                        wg[brackets], "log")
+    out = _interp(low, high, sight.weight, "log")
+    if sight.x is not None:
+        outer = slice(2, 4)
+        beyond = _ln_interp(_gather(cube, vis, a[outer], g0[outer], _ALONG_PATH),
+                            _gather(cube, vis, a[outer], g1[outer], _ALONG_PATH), wg[outer])
+        out = _optical_depth_cubic(out, low, high, beyond, sight.outer, sight.x, sight.weight,
+                                   a[0] == a[1])
+    fallback = ~sight.usable
+    if fallback.any():  # the fixed-range rule where the line of sight leaves a table
+        out[fallback] = base_rules(_ALONG_PATH, fallback)
+    return out
+
+
 def _spectra_of(db, scenarios, interpolation, window):
     """Spectra at each scenario from its :func:`_scenarios` brackets (numpy)."""
-    shape, _, vis, (a0, a1, wa), (g0, g1, wg), _, along = scenarios
+    shape, _, vis, alt, gr, _, along = scenarios
     alt_rule, _, gr_rule = _RULES[interpolation]
     cube = db.cube[..., window]
     n_comp, n_wl = cube.shape[-2:]
     out = np.empty((vis.size, n_comp, n_wl), dtype=np.float64)
     step = max(1, _BLOCK // max(1, n_comp * n_wl))
-    all_components = np.arange(n_comp)
     for start in range(0, vis.size, step):  # blocks of scenarios bound the memory
         s = slice(start, start + step)
-        v = vis[s]
 
-        def at(a, g, components, v=v):
-            spectra = cube[v, a, g]  # whole (component, wavelength) blocks: the fastest gather
-            if components is not all_components:
-                spectra = spectra[:, components]
-            return spectra.astype(np.float64)
-
-        def fixed_range(components, s=s):
-            # altitude at both bracketing ground ranges first, then ground range (pyBSM's order)
-            return _two_steps((at(a0[s], g0[s], components), at(a1[s], g0[s], components)),
-                              (at(a0[s], g1[s], components), at(a1[s], g1[s], components)),
-                              (wa[s], wa[s]), wg[s], (alt_rule, gr_rule))
+        def fixed_range(components, where=slice(None), s=s):
+            return _fixed_range(cube, vis[s][where], [b[s][where] for b in alt],
+                                [b[s][where] for b in gr], (alt_rule, gr_rule), components)
 
         if along is None:
-            out[s] = fixed_range(all_components)
+            out[s] = fixed_range(None)
             continue
-        ((l0, l1, lw), (h0, h1, hw)), weight, usable, cubic = along
         out[s][:, _ACROSS_PATH] = fixed_range(_ACROSS_PATH)
-        # ground range inside each table first, then altitude along the line of sight
-        low = _interp(at(a0[s], l0[s], _ALONG_PATH), at(a0[s], l1[s], _ALONG_PATH), lw[s], "log")
-        high = _interp(at(a1[s], h0[s], _ALONG_PATH), at(a1[s], h1[s], _ALONG_PATH), hw[s],
-                       "log")
-        out[s][:, _ALONG_PATH] = _interp(low, high, weight[s], "log")
-        if cubic is not None:
-            tables, outer, x = cubic
-            beyond = [_ln_interp(at(b[s], b0[s], _ALONG_PATH), at(b[s], b1[s], _ALONG_PATH),
-                                 bw[s]) for b, b0, b1, bw in tables]
-            out[s][:, _ALONG_PATH] = _optical_depth_cubic(
-                out[s][:, _ALONG_PATH], low, high, beyond, outer[s], x[s], weight[s],
-                a0[s] == a1[s])
-        fallback = ~usable[s]
-        if fallback.any():  # the fixed-range rule where the line of sight leaves a table
-            block = out[s]
-            block[fallback[:, None] & np.isin(all_components, _ALONG_PATH)[None, :]] = (
-                fixed_range(_ALONG_PATH)[fallback].reshape(-1, n_wl))
+        out[s][:, _ALONG_PATH] = _line_of_sight(cube, vis[s], along.block(s), fixed_range)
     return out.reshape(shape + (n_comp, n_wl))
 
 
