@@ -27,6 +27,7 @@ are in ``docs/metrics.md``.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -206,9 +207,18 @@ def gauss_legendre_rule(edges, nodes_per_panel: int):
     )
 
 
+@functools.lru_cache(maxsize=16)
+def _legendre(n):
+    """Gauss-Legendre nodes and weights on [-1, 1] (read-only, cached: a few per process)."""
+    t, v = np.polynomial.legendre.leggauss(n)
+    for a in (t, v):
+        a.flags.writeable = False
+    return t, v
+
+
 def _gauss_legendre_kernel(edges, nodes_per_panel):
     """Nodes and weights of :func:`gauss_legendre_rule` (numpy)."""
-    t, v = np.polynomial.legendre.leggauss(int(nodes_per_panel))
+    t, v = _legendre(int(nodes_per_panel))
     a, b = edges[:-1, None], edges[1:, None]
     return ((a + b) / 2 + (b - a) / 2 * t).ravel(), ((b - a) / 2 * v).ravel()
 

@@ -34,6 +34,10 @@ REFERENCE_WAVELENGTH = 1.0e-6
 
 PATH_RULES = ("trapezoid", "gauss-legendre")
 
+#: Values of the (frequency x scenario x wavelength) block that the polychromatic OTF
+#: evaluates at a time.
+_BLOCK = 1 << 16
+
 
 def hufnagel_valley(altitude, high_altitude_wind_speed=21.0, cn2_at_1m=1.7e-14):
     r"""Hufnagel-Valley refractive-index structure parameter profile.
@@ -493,18 +497,26 @@ def _polychromatic_xy_kernel(fx, fy, r0_ref, exposure, speed, diameter, referenc
 
 
 def _polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, wl, w):
-    """Weighted sum over the last (wavelength) axis, one wavelength at a time (numpy).
+    """Weighted sum over the last (wavelength) axis (numpy).
 
-    ``w`` is normalised here. Accumulating wavelength by wavelength keeps memory at
-    one slice of the (frequency x scenario) block instead of materialising the
-    wavelength axis.
+    ``w`` is normalised here. The OTFs are evaluated for as many wavelengths at a time
+    as keep a block within :data:`_BLOCK` values (all of them for one scenario, one at a
+    time for a large sweep, whose memory stays at one slice of the frequency x scenario
+    block), and summed wavelength by wavelength in band order whatever the block.
     """
     w = w / np.nansum(w, axis=-1, keepdims=True)
-    shape = np.broadcast_shapes(*(np.shape(a) for a in (radial, r0_ref, exposure, speed,
-                                                         diameter, reference)), np.shape(w)[:-1])
+    per_wavelength = [np.expand_dims(a, -1) for a in (radial, r0_ref, exposure, speed,
+                                                       diameter, reference)]
+    shape = np.broadcast_shapes(*(a.shape[:-1] for a in per_wavelength), np.shape(w)[:-1])
+    radial, r0_ref, exposure, speed, diameter, reference = per_wavelength
     total = np.zeros(shape)
-    for i in range(np.shape(wl)[-1]):
-        lam = wl[..., i]
+    n_wavelength = np.shape(wl)[-1]
+    step = max(1, _BLOCK // max(1, total.size))
+    for start in range(0, n_wavelength, step):
+        lam = wl[..., start:start + step]
         r0 = _scale_kernel(r0_ref, lam, reference)
-        total += w[..., i] * _wind_blended_kernel(radial, lam, diameter, r0, exposure, speed)
+        terms = w[..., start:start + step] * _wind_blended_kernel(radial, lam, diameter, r0,
+                                                                   exposure, speed)
+        for i in range(terms.shape[-1]):
+            total += terms[..., i]
     return total
