@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from xbsm.otf import aperture, turbulence
 from xbsm.otf.system import _product_kernel
@@ -31,6 +32,24 @@ def test_polychromatic_kernel_of_one_wavelength_is_the_wind_blended_closed_form(
     short = np.exp(-3.44 * (lam * radial / r0) ** (5 / 3) * tilt)
     # atol: the OTF is <= 1; its tail falls to 1e-26 at the highest frequency
     np.testing.assert_allclose(out, w * short + (1 - w) * long, rtol=1e-14, atol=1e-16)
+
+
+@pytest.mark.parametrize("block", [1, 7, 64, 1 << 16])
+def test_polychromatic_kernel_does_not_depend_on_its_blocks(monkeypatch, block):
+    # reference: the weighted sum written out one wavelength at a time, in band order
+    rng = np.random.default_rng(3)
+    radial = rng.uniform(0.0, 4e5, (5, 1))
+    r0_ref, weights = rng.uniform(0.02, 0.2, 11), rng.uniform(0.0, 1.0, (11, 6))
+    wl = np.linspace(0.5e-6, 0.9e-6, 6)
+    t, v, d = 0.01, 100.0, 0.275
+    norm = weights / weights.sum(axis=-1, keepdims=True)
+    expected = np.zeros((5, 11))
+    for i, lam in enumerate(wl):
+        expected += norm[:, i] * turbulence._wind_blended_kernel(
+            radial, lam, d, turbulence._scale_kernel(r0_ref, lam, 1e-6), t, v)
+    monkeypatch.setattr(turbulence, "_BLOCK", block)
+    out = turbulence._polychromatic_kernel(radial, r0_ref, t, v, d, 1e-6, wl, weights)
+    np.testing.assert_allclose(out, expected, rtol=1e-15, atol=0)
 
 
 def test_product_kernel_broadcasts_plain_arrays():

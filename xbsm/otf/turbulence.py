@@ -365,13 +365,21 @@ def _turbulence_xy_kernel(wavelength, coherence_diameter, fx, fy, exposure_coeff
 
 
 def _turbulence_kernel(radial, wavelength, aperture_diameter, coherence_diameter,
-                       exposure_coefficient):
-    """IBSM Eq. 3-3 on plain arrays, at radial frequency ``radial`` >= 0 [cycles/rad]."""
-    return np.exp(
-        -3.44
-        * (wavelength / coherence_diameter * radial) ** (5.0 / 3.0)
-        * (1.0 - exposure_coefficient * (wavelength / aperture_diameter * radial) ** (1.0 / 3.0))
-    )
+                       exposure_coefficient, long_exposure=None):
+    """IBSM Eq. 3-3 on plain arrays, at radial frequency ``radial`` >= 0 [cycles/rad].
+
+    ``long_exposure`` is the exponent of the long-exposure OTF,
+    :func:`_long_exposure_exponent` (computed here if not given).
+    """
+    if long_exposure is None:
+        long_exposure = _long_exposure_exponent(radial, wavelength, coherence_diameter)
+    return np.exp(long_exposure * (1.0 - exposure_coefficient
+                                   * (wavelength / aperture_diameter * radial) ** (1.0 / 3.0)))
+
+
+def _long_exposure_exponent(radial, wavelength, coherence_diameter):
+    """``-3.44 (lambda f / r0)^(5/3)``, the logarithm of the long-exposure turbulence OTF."""
+    return -3.44 * (wavelength / coherence_diameter * radial) ** (5.0 / 3.0)
 
 
 def wind_blended_turbulence(
@@ -427,8 +435,10 @@ def _wind_blended_kernel(radial, wavelength, aperture_diameter, coherence_diamet
                          integration_time, wind_speed):
     """IBSM Eq. 3-9 on plain arrays, at radial frequency ``radial`` >= 0 [cycles/rad]."""
     weight = np.exp(-wind_speed * integration_time / coherence_diameter)
-    short = _turbulence_kernel(radial, wavelength, aperture_diameter, coherence_diameter, 0.5)
-    long = _turbulence_kernel(radial, wavelength, aperture_diameter, coherence_diameter, 0.0)
+    exponent = _long_exposure_exponent(radial, wavelength, coherence_diameter)
+    short = _turbulence_kernel(radial, wavelength, aperture_diameter, coherence_diameter, 0.5,
+                               exponent)
+    long = np.exp(exponent)  # Eq. 3-3 at exposure coefficient 0: its factor is exactly 1
     return weight * short + (1.0 - weight) * long
 
 
@@ -499,24 +509,42 @@ def _polychromatic_xy_kernel(fx, fy, r0_ref, exposure, speed, diameter, referenc
 def _polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, wl, w):
     """Weighted sum over the last (wavelength) axis (numpy).
 
-    ``w`` is normalised here. The OTFs are evaluated for as many wavelengths at a time
-    as keep a block within :data:`_BLOCK` values (all of them for one scenario, one at a
-    time for a large sweep, whose memory stays at one slice of the frequency x scenario
-    block), and summed wavelength by wavelength in band order whatever the block.
+    ``w`` is normalised here. The OTFs are evaluated a block at a time, at most about
+    :data:`_BLOCK` values (columns of the last axis, then as many wavelengths as fit:
+    all of them for one scenario, one at a time for a large sweep), so temporaries stay
+    in cache and memory at one block; every value is summed wavelength by wavelength
+    in band order whatever the block.
     """
     w = w / np.nansum(w, axis=-1, keepdims=True)
-    per_wavelength = [np.expand_dims(a, -1) for a in (radial, r0_ref, exposure, speed,
-                                                       diameter, reference)]
-    shape = np.broadcast_shapes(*(a.shape[:-1] for a in per_wavelength), np.shape(w)[:-1])
-    radial, r0_ref, exposure, speed, diameter, reference = per_wavelength
+    inputs = [np.expand_dims(a, -1) for a in (radial, r0_ref, exposure, speed, diameter,
+                                              reference)] + [np.asarray(wl), w]
+    shape = np.broadcast_shapes(*(np.shape(a)[:-1] for a in inputs))
     total = np.zeros(shape)
     n_wavelength = np.shape(wl)[-1]
-    step = max(1, _BLOCK // max(1, total.size))
-    for start in range(0, n_wavelength, step):
-        lam = wl[..., start:start + step]
-        r0 = _scale_kernel(r0_ref, lam, reference)
-        terms = w[..., start:start + step] * _wind_blended_kernel(radial, lam, diameter, r0,
-                                                                   exposure, speed)
-        for i in range(terms.shape[-1]):
-            total += terms[..., i]
+    for columns in _column_blocks(shape):
+        # each input's axis before the wavelength axis is the last axis of ``shape``
+        radial_, r0_ref_, exposure_, speed_, diameter_, reference_, wl_, w_ = (
+            a[..., columns, :] if a.ndim >= 2 and a.shape[-2] > 1 else a for a in inputs)
+        out = total[..., columns]
+        step = max(1, _BLOCK // max(1, out.size))
+        for start in range(0, n_wavelength, step):
+            lam = wl_[..., start:start + step]
+            r0 = _scale_kernel(r0_ref_, lam, reference_)
+            terms = w_[..., start:start + step] * _wind_blended_kernel(
+                radial_, lam, diameter_, r0, exposure_, speed_)
+            for i in range(terms.shape[-1]):
+                out += terms[..., i]
     return total
+
+
+def _column_blocks(shape):
+    """Slices of the last axis of ``shape`` giving blocks of about :data:`_BLOCK` values.
+
+    A 0-d shape is one block.
+    """
+    if not shape:
+        yield Ellipsis
+        return
+    columns = max(1, _BLOCK // max(1, int(np.prod(shape[:-1]))))
+    for start in range(0, max(shape[-1], 1), columns):
+        yield slice(start, start + columns)
