@@ -59,7 +59,9 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
 
 def _snr(sensor: xr.Dataset, scenario: xr.Dataset, m: Method, targets: str):
     """The SNR chain on validated inputs, and the optics cutoff over the same band curves."""
-    atm = _band_atmosphere(sensor, scenario, m)
+    atm = band_atmosphere(scenario["altitude"], scenario["ground_range"], scenario["visibility"],
+                          sensor["wavelength_min"], sensor["wavelength_max"],
+                          interpolation=m.atmosphere_interpolation, band_edges=m.band_edges)
     target, background = radiometry.aperture_radiances(
         atm, scenario, targets, sensor["wavelength_min"], m.constants)
     band = radiometry.sensor_band_terms(sensor, atm["wavelength"], m.constants)
@@ -86,14 +88,6 @@ def _snr(sensor: xr.Dataset, scenario: xr.Dataset, m: Method, targets: str):
         "spectral_weights": signal["spectral_weights"],
         "flags": flags,
     }, m, targets=targets), cutoff
-
-
-def _band_atmosphere(sensor: xr.Dataset, scenario: xr.Dataset, m: Method) -> xr.Dataset:
-    """The atmosphere over the sensor's band for every scenario, by the method's knobs."""
-    return band_atmosphere(
-        scenario["altitude"], scenario["ground_range"], scenario["visibility"],
-        sensor["wavelength_min"], sensor["wavelength_max"],
-        interpolation=m.atmosphere_interpolation, band_edges=m.band_edges)
 
 
 def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibration=None):
