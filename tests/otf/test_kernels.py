@@ -52,6 +52,17 @@ def test_polychromatic_kernel_does_not_depend_on_its_blocks(monkeypatch, block):
     np.testing.assert_allclose(out, expected, rtol=1e-15, atol=0)
 
 
+def test_polychromatic_kernel_of_scalars_is_a_scalar():
+    # one frequency, one scenario: the two-wavelength sum written out
+    wl, w = np.array([0.5e-6, 0.6e-6]), np.array([1.0, 2.0])
+    out = turbulence._polychromatic_kernel(np.float64(1e5), 0.05, 0.01, 100.0, 0.1, 1e-6, wl, w)
+    expected = sum(w[i] / 3.0 * turbulence._wind_blended_kernel(
+        1e5, lam, 0.1, turbulence._scale_kernel(0.05, lam, 1e-6), 0.01, 100.0)
+        for i, lam in enumerate(wl))
+    assert np.shape(out) == ()
+    np.testing.assert_allclose(out, expected, rtol=1e-15)
+
+
 def test_product_kernel_broadcasts_plain_arrays():
     a, b = np.array([[1.0], [2.0]]), np.array([3.0, 4.0])
     # closed form: the outer product

@@ -519,9 +519,9 @@ def _polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, 
     inputs = [np.expand_dims(a, -1) for a in (radial, r0_ref, exposure, speed, diameter,
                                               reference)] + [np.asarray(wl), w]
     shape = np.broadcast_shapes(*(np.shape(a)[:-1] for a in inputs))
-    total = np.zeros(shape)
+    total = np.zeros(shape or (1,))  # a 0-d result is computed as one value
     n_wavelength = np.shape(wl)[-1]
-    for columns in _column_blocks(shape):
+    for columns in _column_blocks(total.shape):
         # each input's axis before the wavelength axis is the last axis of ``shape``
         radial_, r0_ref_, exposure_, speed_, diameter_, reference_, wl_, w_ = (
             a[..., columns, :] if a.ndim >= 2 and a.shape[-2] > 1 else a for a in inputs)
@@ -534,17 +534,11 @@ def _polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, 
                 radial_, lam, diameter_, r0, exposure_, speed_)
             for i in range(terms.shape[-1]):
                 out += terms[..., i]
-    return total
+    return total.reshape(shape)
 
 
 def _column_blocks(shape):
-    """Slices of the last axis of ``shape`` giving blocks of about :data:`_BLOCK` values.
-
-    A 0-d shape is one block.
-    """
-    if not shape:
-        yield Ellipsis
-        return
+    """Slices of the last axis of ``shape`` (at least 1-d): blocks of about :data:`_BLOCK`."""
     columns = max(1, _BLOCK // max(1, int(np.prod(shape[:-1]))))
     for start in range(0, max(shape[-1], 1), columns):
         yield slice(start, start + columns)
