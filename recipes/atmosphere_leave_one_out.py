@@ -293,16 +293,18 @@ def _end_slope(h_near, h_far, s_near, s_far):
 def _monotone_cubic(x, y, outer, target, slopes):
     """Monotone cubic Hermite value in [x1, x2] of the stencil (x0, x1, x2, x3).
 
-    ``x`` (n, 4), ``y`` (n, 4, wavelength); ``outer`` (n, 2): whether x0 and x3 exist
+    ``x`` (n, 4) or, a coordinate per wavelength, (n, 4, wavelength) with ``target``
+    (n, wavelength); ``y`` (n, 4, wavelength); ``outer`` (n, 2): whether x0 and x3 exist
     (a missing or infinite outer value gives the one-sided end derivative, or the
     secant without either).
     """
-    X = [x[:, k, None] for k in range(4)]
+    per_wavelength = x.ndim == 3  # a coordinate per wavelength: x (n, 4, wavelength)
+    X = [x[:, k] if per_wavelength else x[:, k, None] for k in range(4)]
     Y = [y[:, k] for k in range(4)]
     h0, h1, h2 = X[1] - X[0], X[2] - X[1], X[3] - X[2]
     with np.errstate(divide="ignore", invalid="ignore"):
         s0, s1, s2 = (Y[1] - Y[0]) / h0, (Y[2] - Y[1]) / h1, (Y[3] - Y[2]) / h2
-    t = (target[:, None] - X[1]) / h1
+    t = ((target if per_wavelength else target[:, None]) - X[1]) / h1
     left = outer[:, 0, None] & np.isfinite(Y[0])
     right = outer[:, 1, None] & np.isfinite(Y[3])
     d1 = np.where(left, _interior_slope(h0, h1, s0, s1, slopes),
@@ -324,7 +326,14 @@ def multi_node(db, altitude, ground_range, visibility, *, coordinate="optical-pa
     of a higher one), so it is interpolated through the ground and the bracketing
     tables and one table beyond each (PCHIP's or Steffen's slopes, four-point
     stencil: the same value as a monotone cubic through all the nodes) in
-    ``coordinate`` (see :func:`_path_coordinate`). ``slopes="exp-fit"`` instead fits
+    ``coordinate`` (see :func:`_path_coordinate`). ``scale_height`` may be a callable
+    ``(db, altitude, visibility) -> (scenario, wavelength)`` scale heights taken from the
+    database's own nadir columns (:func:`global_scale_heights`,
+    :func:`local_scale_heights`): the coordinate is then one per wavelength.
+    ``coordinate="nadir-column"`` uses the vertical optical depth of the nadir columns
+    itself (exact in the plane-parallel limit), at the scenario's altitude the package
+    cubic's at ground range 0; the package rule where the columns do not increase
+    through the stencil. ``slopes="exp-fit"`` instead fits
     the optical depth of the extinction ``a exp(-z / H) + b`` to the two brackets and
     the ground (linear in ``coordinate`` where a or b comes out negative).
 
@@ -341,9 +350,24 @@ def multi_node(db, altitude, ground_range, visibility, *, coordinate="optical-pa
     n = altitude.size
     # the ground is node 0: altitude 0, optical depth 0
     heights = np.concatenate([[0.0], nodes])
-    x_nodes = np.broadcast_to(
-        _path_coordinate(coordinate, heights[None, :], sin_e[:, None], scale_height),
-        (n, heights.size))
+    if coordinate == "nadir-column":  # the vertical optical depth of the nadir columns
+        v = np.searchsorted(-db.visibility, -visibility)
+        with np.errstate(divide="ignore"):
+            column = -np.log(db.cube[:, :nodes.size, 0, 0, :].astype(np.float64))
+        x_nodes = np.concatenate([np.zeros((n, 1, column.shape[-1])), column[v]], axis=1)
+        nadir = _interpolate_database(db, altitude, 0.0 * altitude, visibility,
+                                      "optical-depth-cubic", slice(None))
+        nadir_target = -np.log(nadir[:, 0])  # the package's cubic at ground range 0
+    elif callable(scale_height):  # a scale height per (visibility, wavelength) of the database
+        if slopes == "exp-fit":
+            raise ValueError("exp-fit takes one scale height")
+        scale_height = scale_height(db, altitude, visibility)[:, None, :]  # (scenario, 1, wl)
+        x_nodes = _path_coordinate(coordinate, heights[None, :, None], sin_e[:, None, None],
+                                   scale_height)  # (scenario, node, wavelength)
+    else:
+        x_nodes = np.broadcast_to(
+            _path_coordinate(coordinate, heights[None, :], sin_e[:, None], scale_height),
+            (n, heights.size))
     tau = np.concatenate([np.zeros((n, 1, logs.shape[-1])), -logs[:, :, 0]], axis=1)
     lnc = np.concatenate([np.full((n, 1, 2, logs.shape[-1]), np.nan), logs[:, :, 1:]], axis=1)
     covered = np.concatenate([np.ones((n, 1), dtype=bool), covered], axis=1)
@@ -356,8 +380,16 @@ def multi_node(db, altitude, ground_range, visibility, *, coordinate="optical-pa
     rows = np.arange(n)[:, None]
     x, ok = x_nodes[rows, stencil], covered[rows, stencil]
     ok[:, 3] &= i3 > i2
-    target = _path_coordinate(coordinate, altitude, sin_e, scale_height)
-    t = ((target - x[:, 1]) / (x[:, 2] - x[:, 1]))[:, None]
+    if coordinate == "nadir-column":
+        target = nadir_target
+        t = (target - x[:, 1]) / (x[:, 2] - x[:, 1])
+    elif x.ndim == 3:
+        target = _path_coordinate(coordinate, altitude[:, None], sin_e[:, None],
+                                  scale_height[:, 0])  # (scenario, wavelength)
+        t = (target - x[:, 1]) / (x[:, 2] - x[:, 1])
+    else:
+        target = _path_coordinate(coordinate, altitude, sin_e, scale_height)
+        t = ((target - x[:, 1]) / (x[:, 2] - x[:, 1]))[:, None]
     y = tau[rows, stencil]
     if slopes == "exp-fit":
         # tau(h) = a X(h) + b s(h) through tau(h0), tau(h1) (tau(0) = 0); Cramer's rule
@@ -388,7 +420,95 @@ def multi_node(db, altitude, ground_range, visibility, *, coordinate="optical-pa
     along = out[:, _ALONG]
     bad = ~usable[:, None, None] | ~np.isfinite(along) | (along <= 0.0)
     out[:, _ALONG] = np.where(bad, base[:, _ALONG], along)
+    if coordinate == "nadir-column":  # the package's rule where the columns are no coordinate
+        increasing = (np.diff(x, axis=1) > 0.0).all(axis=1) & np.isfinite(x).all(axis=1)
+        cubic = _interpolate_database(db, altitude, ground_range, visibility,
+                                      "optical-depth-cubic", slice(None))
+        out[:, _ALONG] = np.where(increasing[:, None], out[:, _ALONG], cubic[:, _ALONG])
     return out
+
+
+def fitted_scale_heights(db, top=20000.0, floor=1e-3, fallback=SCALE_HEIGHT,
+                         bounds=(100.0, 50000.0)):
+    """Scale height H of each (visibility, wavelength) fitted to the database's nadir columns.
+
+    The nadir entry (ground range 0) of each altitude table up to ``top`` gives the
+    vertical optical depth from the ground, tau(h) = -ln TRANS(h, nadir); the fit is
+    tau(h) = tau_inf (1 - exp(-h / H)), least squares in the residual relative to
+    tau + ``floor`` (relative where tau is large, absolute where it is small), H on a
+    log grid within ``bounds`` (tau_inf in closed form for each). Only the tables in
+    ``db`` are used (the leave-one-out's thinned database). ``fallback`` where the fit
+    is ill-posed: fewer than 3 usable nodes (TRANS 0, i.e. below the database floor,
+    or missing), a column that does not grow, or a best H at an end of the grid.
+    Returns (visibility, wavelength) [m].
+    """
+    keep = (db.altitude <= top) & db.present[:, :, 0].all(axis=0)
+    h = db.altitude[keep]
+    with np.errstate(divide="ignore"):
+        tau = -np.log(db.cube[:, keep, 0, 0, :].astype(np.float64))  # (vis, node, wl)
+    usable = np.isfinite(tau) & (tau > 0.0)
+    weight = np.where(usable, 1.0 / (np.where(usable, tau, 0.0) + floor) ** 2, 0.0)
+    tau = np.where(usable, tau, 0.0)
+    grid = np.geomspace(*bounds, 241)
+    basis = -np.expm1(-h[None, :] / grid[:, None])  # (H, node)
+    # weighted least squares of tau_inf for each H: sum w f tau / sum w f^2
+    wf_tau = np.einsum("gn,vnw->gvw", basis, weight * tau)
+    wf2 = np.einsum("gn,vnw->gvw", basis ** 2, weight)
+    wt2 = np.einsum("vnw->vw", weight * tau ** 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        residual = wt2[None] - wf_tau ** 2 / wf2  # (H, vis, wl)
+    residual = np.where(np.isfinite(residual), residual, np.inf)
+    best = np.argmin(residual, axis=0)
+    grows = np.take_along_axis(tau, np.argmax(usable * h[None, :, None], axis=1)[:, None],
+                               axis=1)[:, 0] > np.where(usable, tau, np.inf).min(axis=1)
+    posed = ((usable.sum(axis=1) >= 3) & grows & (best > 0) & (best < grid.size - 1)
+             & np.isfinite(residual.min(axis=0)))
+    return np.where(posed, grid[best], fallback)
+
+
+def global_scale_heights(db, altitude, visibility, **fit):
+    """(scenario, wavelength) scale heights of :func:`fitted_scale_heights`."""
+    return fitted_scale_heights(db, **fit)[np.searchsorted(-db.visibility, -visibility)]
+
+
+def local_scale_heights(db, altitude, visibility, fallback=SCALE_HEIGHT,
+                        bounds=(100.0, 50000.0), intervals=2):
+    """(scenario, wavelength) scale heights from the nadir columns around each scenario.
+
+    The mean vertical extinction of the interval below the bracketing tables (from the
+    table below the lower bracket, or the ground) and of the interval above them (to the
+    table above the upper bracket) give H = (distance of the intervals' midpoints) /
+    ln(ratio of the extinctions); ``fallback`` where either is missing, not positive or
+    not finite, or H is outside ``bounds``. ``intervals=3`` also uses the interval
+    between the brackets: H from the least-squares slope of ln(extinction) against the
+    three midpoints. Only the tables in ``db`` are used.
+    """
+    v = np.searchsorted(-db.visibility, -visibility)
+    nodes = db.altitude[db.altitude <= _GAP[0]]
+    heights = np.concatenate([[0.0], nodes])
+    with np.errstate(divide="ignore"):
+        tau = -np.log(db.cube[:, :nodes.size, 0, 0, :].astype(np.float64))
+    tau = np.concatenate([np.zeros_like(tau[:, :1]), tau], axis=1)  # the ground: 0
+    a0, a1, _ = _bracket(altitude, nodes)
+    lo = a0 + 1  # the lower bracket among heights (the ground is 0)
+    hi = np.minimum(np.maximum(a1, a0 + 1) + 1, heights.size - 1)  # above 24.5 km: no table
+    below, above = lo - 1, np.minimum(hi + 1, heights.size - 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k_below = (tau[v, lo] - tau[v, below]) / (heights[lo] - heights[below])[:, None]
+        k_above = (tau[v, above] - tau[v, hi]) / (heights[above] - heights[hi])[:, None]
+        span = (0.5 * (heights[above] + heights[hi] - heights[lo] - heights[below]))[:, None]
+        h = span / np.log(k_below / k_above)
+        if intervals == 3:
+            k_mid = (tau[v, hi] - tau[v, lo]) / (heights[hi] - heights[lo])[:, None]
+            m = np.stack([0.5 * (heights[lo] + heights[below]), 0.5 * (heights[lo] + heights[hi]),
+                          0.5 * (heights[above] + heights[hi])], axis=1)[:, :, None]
+            ln_k = np.log(np.stack([k_below, k_mid, k_above], axis=1))
+            dm = m - m.mean(axis=1, keepdims=True)
+            slope = (dm * (ln_k - ln_k.mean(axis=1, keepdims=True))).sum(axis=1) / (
+                dm * dm).sum(axis=1)
+            h = -1.0 / slope
+    good = (np.isfinite(h) & (h >= bounds[0]) & (h <= bounds[1]) & (above > hi)[:, None])
+    return np.where(good, h, fallback)
 
 
 #: Candidate rules of the study: label -> rule(db, altitude, ground_range, visibility).
@@ -399,6 +519,11 @@ CANDIDATES = {
     "cubic, optical path H=2.5 km": functools.partial(multi_node, scale_height=2500.0),
     "Steffen, optical path H=2.5 km": functools.partial(multi_node, scale_height=2500.0,
                                                         slopes="steffen"),
+    "cubic, optical path H fitted (nadir columns)": functools.partial(
+        multi_node, scale_height=global_scale_heights),
+    "cubic, optical path H local (nadir columns)": functools.partial(
+        multi_node, scale_height=local_scale_heights),
+    "cubic, nadir optical depth": functools.partial(multi_node, coordinate="nadir-column"),
     "cubic, altitude": functools.partial(multi_node, coordinate="altitude"),
     "cubic, sqrt altitude": functools.partial(multi_node, coordinate="sqrt-altitude"),
     "cubic, slant length": functools.partial(multi_node, coordinate="slant"),
