@@ -614,12 +614,14 @@ def _fixed_range(cube, vis, alt, gr, rules, components=None):
     return _interp(by_range[0], by_range[1], wg, rules[1])
 
 
-def _line_of_sight(cube, vis, sight, base_rules):
+def _line_of_sight(cube, vis, sight, fixed_range):
     """TRANS, SURF_EMIS, GRND_RFLT of the line-of-sight rules (numpy kernel).
 
     Ground range log-linear inside each table, then altitude along the line of sight:
     log-linear in the optical-path coordinate (``"same-elevation"``) or the cubic
-    (``"optical-depth-cubic"``, :func:`_optical_depth_cubic`).
+    (``"optical-depth-cubic"``, :func:`_optical_depth_cubic`). ``fixed_range(components,
+    where)`` gives the fixed-range rule's values, taken where the line of sight leaves
+    a table.
     """
     a, g0, g1, wg = (t.T for t in sight.tables)  # (table, scenario)
     brackets = slice(0, 2)
@@ -635,7 +637,7 @@ def _line_of_sight(cube, vis, sight, base_rules):
                                    a[0] == a[1])
     fallback = ~sight.usable
     if fallback.any():  # the fixed-range rule where the line of sight leaves a table
-        out[fallback] = base_rules(_ALONG_PATH, fallback)
+        out[fallback] = fixed_range(_ALONG_PATH, fallback)
     return out
 
 
