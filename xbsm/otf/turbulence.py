@@ -10,6 +10,7 @@ import xarray as xr
 from .._kernels import apply_kernel
 from .._metadata import described
 from ..geometry import altitude_along_path
+from ..quadrature import _legendre
 from .spectral import (
     _nonnegative,
     _positive,
@@ -134,7 +135,7 @@ def _path_nodes(path_samples, rule):
     else:
         # Gauss-Legendre in u with z = L u^2: the substitution makes the
         # (z/L)^(5/3) weight and the near-target boundary layer smooth in u.
-        x, w = np.polynomial.legendre.leggauss(path_samples)
+        x, w = _legendre(path_samples)
         u = 0.5 * (x + 1.0)
         t, w = u**2, w * u  # dz/L = 2u du, du = dx/2
     for a in (t, w):
