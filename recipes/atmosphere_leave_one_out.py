@@ -7,10 +7,10 @@ with ``spacing=4`` three tables are removed and the neighbours are four times th
 real spacing apart. The real spacing itself has no truth between nodes; the ratio
 of the two gives the order of convergence to extrapolate to it.
 
-The ``xbsm`` rules ("linear", "log-linear", "same-elevation", "optical-depth-cubic") run
-through the
-package's own kernel on a copy of the database with the tables removed, so the
-numbers are those of ``atmosphere_at`` on such a database.
+The ``xbsm`` rules ("linear", "log-linear", "same-elevation", "optical-depth-cubic",
+"extinction-profile", the presets' rule) run through the package's own kernel on a
+copy of the database with the tables removed, so the numbers are those of
+``atmosphere_at`` on such a database.
 
 Run from the repository root with the project environment (numbers go to
 docs/atmosphere.md; see ``recipes/README.md``)::
@@ -20,8 +20,9 @@ docs/atmosphere.md; see ``recipes/README.md``)::
 
 The candidate rules (``CANDIDATES``) interpolate across altitude through more than the
 two bracketing tables; the first, "cubic, optical path H=2 km", is the package's
-"optical-depth-cubic" (the presets' rule; see docs/atmosphere.md), the others are not in
-the package.
+"optical-depth-cubic" (see docs/atmosphere.md), the others are not in the package.
+The candidate table also shows the package's "extinction-profile", which scales that
+cubic's increment to the nadir columns' extinction profile (the presets' rule).
 """
 
 from __future__ import annotations
@@ -184,7 +185,8 @@ def kernel_errors(db, axis: str, rule, wavelength_index, spacing=2, visibility=N
     return {name: np.concatenate(e) for name, e in errors.items()}
 
 
-KERNEL_RULES = ("linear", "log-linear", "same-elevation", "optical-depth-cubic")
+KERNEL_RULES = ("linear", "log-linear", "same-elevation", "optical-depth-cubic",
+                "extinction-profile")
 
 
 def _cell(err):
@@ -535,7 +537,7 @@ CANDIDATES = {
 def print_candidate_tables(db, wl, axes=("altitude", "ground_range")):
     """``"same-elevation"`` and every candidate, 2x, TRANS, SURF_EMIS, GRND_RFLT."""
     rules = {"same-elevation": "same-elevation", "optical-depth-cubic": "optical-depth-cubic",
-             **CANDIDATES}
+             "extinction-profile": "extinction-profile", **CANDIDATES}
     print("| axis | visibility | component | " + " | ".join(rules) + " |")
     print("|---" * (3 + len(rules)) + "|")
     for axis in axes:

@@ -3,8 +3,8 @@
 The Olson camera (both bands) at 1, 2, 3 and 5 km altitude and halfway between
 database altitudes (1.5, 2.5, 3.5, 5.5 km), every database ground range, both
 visibilities, ``method="accurate"`` with ``atmosphere_interpolation`` "log-linear"
-(fixed ground range) against "same-elevation" and against "optical-depth-cubic" (the
-presets' rule). Cells that are NaN under either rule
+(fixed ground range) against "same-elevation", "optical-depth-cubic" and
+"extinction-profile" (the presets' rule). Cells that are NaN under either rule
 (beyond the horizon) are left out, and so are cells where either NIIRS is off the
 0-10 rating scale (SNR near zero at long range in 5 km visibility, where NIIRS runs
 to minus infinity and any difference is meaningless).
@@ -28,7 +28,8 @@ import xbsm
 OUT = Path(__file__).resolve().parent.parent / "docs" / "benchmarks" / "atmosphere_rule_effect.json"
 ALTITUDES = {"database altitudes": [1000.0, 2000.0, 3000.0, 5000.0],
              "halfway between database altitudes": [1500.0, 2500.0, 3500.0, 5500.0]}
-RULES = ("log-linear", "same-elevation", "optical-depth-cubic")  # the first is the reference
+RULES = ("log-linear", "same-elevation", "optical-depth-cubic",
+         "extinction-profile")  # the first is the reference
 
 
 def _summary(values):

@@ -253,9 +253,9 @@ def test_ground_range_at_elevation_inverts_the_curved_earth_geometry():
         np.testing.assert_allclose(back, g, rtol=1e-9, atol=1e-6)
 
 
-def _altitude_leave_one_out(db, rule, wavelength_index):
-    """|rebuilt / true - 1| of TRANS and GRND_RFLT: each interior table up to 18 km rebuilt
-    by the package's kernel from a database without it."""
+def _altitude_leave_one_out(db, rule, wavelength_index, components=(0, 4)):
+    """|rebuilt / true - 1| of ``components`` (default TRANS and GRND_RFLT, pooled): each
+    interior table up to 18 km rebuilt by the package's kernel from a database without it."""
     errors = []
     for a in range(1, 21):
         keep = db.present[:, a] & db.present[:, a - 1] & db.present[:, a + 1]
@@ -268,7 +268,7 @@ def _altitude_leave_one_out(db, rule, wavelength_index):
         est = atm._interpolate_database(thin, np.full(v.size, db.altitude[a]),
                                         db.ground_range[g], db.visibility[v], rule, slice(None))
         true = db.cube[v, a, g].astype(float)
-        for c in (0, 4):
+        for c in components:
             t = true[:, c, wavelength_index]
             scored = t >= 1e-3 * true[:, c].max(axis=1, keepdims=True)
             errors.append(np.abs(est[:, c][scored] / t[scored] - 1))
@@ -292,6 +292,23 @@ def test_each_line_of_sight_rule_beats_the_one_before_in_the_altitude_leave_one_
     assert np.median(new) < 0.5 * np.median(old)
     assert np.percentile(new, 95) < 0.6 * np.percentile(old, 95)
     assert np.percentile(new, 95) < bound
+
+
+@pytest.mark.parametrize("component", ["TRANS", "SURF_EMIS", "GRND_RFLT"])
+def test_extinction_profile_meets_three_percent_in_the_altitude_leave_one_out(db, component):
+    # issue 12's target: each interior table rebuilt from the others (neighbours twice the
+    # real spacing apart), 95th percentile of |relative error| at most 3 % for each
+    # attenuated component, medians no worse than optical-depth-cubic's. Measured
+    # (recipes/atmosphere_leave_one_out.py): TRANS 1.9 %, SURF_EMIS 2.7 %, GRND_RFLT 2.0 %
+    # (optical-depth-cubic 2.8 %, 4.0 %, 3.1 %); medians 0.06-0.09 % (0.08-0.12 %)
+    wavelengths = [int(np.argmin(np.abs(db.wavelength - w * 1e-6)))
+                   for w in (0.45, 0.6, 1.0, 2.2, 4.0, 10.0)]
+    c = atm.COMPONENTS.index(component)
+    cubic = _altitude_leave_one_out(db, "optical-depth-cubic", wavelengths, (c,))
+    profile = _altitude_leave_one_out(db, "extinction-profile", wavelengths, (c,))
+    assert profile.size == cubic.size > 5000
+    assert np.percentile(profile, 95) <= 0.03
+    assert np.median(profile) <= np.median(cubic)
 
 
 def test_same_elevation_equals_log_linear_at_database_altitudes(db):
@@ -349,19 +366,20 @@ def test_optical_depth_cubic_rebuilds_a_left_out_table_better_than_same_elevatio
     assert np.median(new) < np.median(old) and new.max() < old.max()
 
 
-def test_optical_depth_cubic_equals_log_linear_at_database_altitudes():
+@pytest.mark.parametrize("rule", ["optical-depth-cubic", "extinction-profile"])
+def test_cubic_rules_equal_log_linear_at_database_altitudes(rule):
     ground_range = xr.DataArray(np.linspace(0.0, 150e3, 61), dims="s")
-    for altitude in (2.0, 32.5, 1000.0, 5000.0, 20000.0):
+    for altitude in (2.0, 32.5, 1000.0, 5000.0, 20000.0, 24500.0):
         old = atm.atmosphere_at(altitude, ground_range, 5.0, interpolation="log-linear")
-        new = atm.atmosphere_at(altitude, ground_range, 5.0,
-                                interpolation="optical-depth-cubic")
+        new = atm.atmosphere_at(altitude, ground_range, 5.0, interpolation=rule)
         xr.testing.assert_identical(old, new.assign_attrs(interpolation="log-linear"))
 
 
-def test_optical_depth_cubic_falls_back_as_same_elevation_does_and_flags_it():
+@pytest.mark.parametrize("rule", ["optical-depth-cubic", "extinction-profile"])
+def test_cubic_rules_fall_back_as_same_elevation_does_and_flag_it(rule):
     # at 7.5 km and 295 km the 8 km table would be needed beyond 300 km: log-linear
     old = atm.atmosphere_at(7500.0, 295e3, 23.0, interpolation="log-linear")
-    new = atm.atmosphere_at(7500.0, 295e3, 23.0, interpolation="optical-depth-cubic")
+    new = atm.atmosphere_at(7500.0, 295e3, 23.0, interpolation=rule)
     assert int(new["flags"]) == FLAGS["atmosphere_fallback"][0]
     for name in atm.VARIABLES:
         assert np.isfinite(new[name]).all()
@@ -371,7 +389,7 @@ def test_optical_depth_cubic_falls_back_as_same_elevation_does_and_flags_it():
     altitude = xr.DataArray(np.exp(rng.uniform(np.log(2.0), np.log(40e3), 400)), dims="s")
     ground_range = xr.DataArray(rng.uniform(0.0, 300e3, 400), dims="s")
     bounds = (0.4e-6, 1e-6)
-    cubic = atm.atmosphere_at(altitude, ground_range, 5.0, interpolation="optical-depth-cubic",
+    cubic = atm.atmosphere_at(altitude, ground_range, 5.0, interpolation=rule,
                               wavelength_bounds=bounds)
     same = atm.atmosphere_at(altitude, ground_range, 5.0, interpolation="same-elevation",
                              wavelength_bounds=bounds)
@@ -384,10 +402,16 @@ def test_optical_depth_cubic_falls_back_as_same_elevation_does_and_flags_it():
         assert np.isfinite(cubic[name].values[~beyond]).all()
 
 
-def test_optical_depth_cubic_is_monotone_along_a_long_low_line_of_sight(db):
+@pytest.mark.parametrize("rule", ["optical-depth-cubic", "extinction-profile"])
+@pytest.mark.parametrize("visibility", [23.0, 5.0])
+def test_cubic_rules_are_monotone_along_a_long_low_line_of_sight(db, rule, visibility):
     # sensors along one line of sight at 2 degrees elevation, 2 m to 8 km (slant up to
     # 220 km): the transmittance falls with altitude between nodes and stays between
-    # the values at the nodes
+    # the values at the nodes. extinction-profile scales the monotone cubic's increment by
+    # a factor that varies with altitude, which can reverse a step by a little: measured
+    # at most 1.2e-3 of the interval's largest value, in absorption bands where TRANS is
+    # 1e-7 to 1e-2 (0.84-2.48 um); 2e-3 allowed
+    slack = 1e-12 if rule == "optical-depth-cubic" else 2e-3
     elevation = np.radians(2.0)
     nodes = db.altitude[db.altitude <= 8000.0]
     altitude = np.unique(np.concatenate(
@@ -395,9 +419,8 @@ def test_optical_depth_cubic_is_monotone_along_a_long_low_line_of_sight(db):
     ground_range = atm._ground_range_at_elevation(np.sin(elevation), np.cos(elevation),
                                                   altitude)
     out = atm.atmosphere_at(xr.DataArray(altitude, dims="s"),
-                            xr.DataArray(ground_range, dims="s"), 23.0,
-                            interpolation="optical-depth-cubic",
-                            wavelength_bounds=(0.4e-6, 2.5e-6))
+                            xr.DataArray(ground_range, dims="s"), visibility,
+                            interpolation=rule, wavelength_bounds=(0.4e-6, 2.5e-6))
     assert not out["flags"].any()
     trans = out["transmission"].transpose("s", "wavelength").values
     for a, b in zip(nodes[:-1], nodes[1:], strict=True):
@@ -405,7 +428,7 @@ def test_optical_depth_cubic_is_monotone_along_a_long_low_line_of_sight(db):
         ends = inside[[0, -1]]
         steps = np.diff(inside, axis=0)
         rising = ends[1] >= ends[0]
-        tol = 1e-12 * inside.max(axis=0)
+        tol = slack * inside.max(axis=0)
         assert np.all(np.where(rising, steps >= -tol, steps <= tol))
         assert np.all(inside >= ends.min(axis=0) - tol)
         assert np.all(inside <= ends.max(axis=0) + tol)
@@ -552,7 +575,7 @@ def test_dask_inputs_outside_the_domain_raise_when_computed():
     ground_range=st.floats(0.0, 300e3),
     visibility=st.sampled_from([5.0, 23.0]),
     interpolation=st.sampled_from(["linear", "log-linear", "same-elevation",
-                                   "optical-depth-cubic"]),
+                                   "optical-depth-cubic", "extinction-profile"]),
 )
 def test_values_finite_where_unflagged_and_nan_where_flagged(
         altitude, ground_range, visibility, interpolation):

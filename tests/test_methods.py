@@ -215,11 +215,11 @@ def test_misspelt_knob_gets_the_closest_names():
         xbsm.method("accurate", nodes_per_pannel=12)
 
 
-def test_atmosphere_interpolation_defaults_optical_depth_cubic_and_pybsm_keeps_linear():
-    # docs/atmosphere.md: "optical-depth-cubic" wins the altitude leave-one-out; "linear"
+def test_atmosphere_interpolation_defaults_extinction_profile_and_pybsm_keeps_linear():
+    # docs/atmosphere.md: "extinction-profile" wins the altitude leave-one-out; "linear"
     # is pyBSM 0.16.1's load_database_atmosphere; the older rules stay available by name
-    assert PRESETS["accurate"].atmosphere_interpolation == "optical-depth-cubic"
-    assert PRESETS["fast"].atmosphere_interpolation == "optical-depth-cubic"
+    assert PRESETS["accurate"].atmosphere_interpolation == "extinction-profile"
+    assert PRESETS["fast"].atmosphere_interpolation == "extinction-profile"
     assert PRESETS["pybsm"].atmosphere_interpolation == "linear"
     assert xbsm.method("accurate", atmosphere_interpolation="log-linear").describe() == (
         "accurate (atmosphere_interpolation=log-linear)")

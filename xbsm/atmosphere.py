@@ -28,7 +28,7 @@ Interpolation between database nodes (``interpolation=``):
     radiances use ``"log-linear"``. Where a same-elevation point leaves a table's
     coverage (the horizon, 300 km) and above 24.5 km the rule falls back to
     ``"log-linear"`` and sets the ``atmosphere_fallback`` flag (not at 24.5-550 km).
-``"optical-depth-cubic"`` (default of the ``accurate`` and ``fast`` presets)
+``"optical-depth-cubic"``
     As ``"same-elevation"``, but the logarithm of TRANS, SURF_EMIS and GRND_RFLT
     (-ln TRANS is the line of sight's optical depth) is a monotone cubic (PCHIP
     slopes) in the same optical-path coordinate through the two bracketing tables
@@ -38,6 +38,15 @@ Interpolation between database nodes (``interpolation=``):
     database floor) gives a one-sided slope (the secant without either outer
     table); the bracketing tables, the path radiances, the fallback and its flag
     are ``"same-elevation"``'s, and so is the value where a bracketing value is zero.
+``"extinction-profile"`` (default of the ``accurate`` and ``fast`` presets)
+    ``"optical-depth-cubic"`` with its increment over the lower bracketing table scaled
+    so that, straight down, it equals the vertical optical depth of an extinction
+    profile built from the tables' nadir columns: in each interval between tables,
+    ln(extinction) is a line between end values that lean to the smoother side
+    (Akima's weights) plus a quadratic bulge that makes the interval's mean right, so a
+    boundary layer that stays uniform and then drops inside an interval is followed.
+    Where the profile cannot be built (TRANS 0 at the database floor) the factor is 1.
+    Nodes, fallback and flags are ``"optical-depth-cubic"``'s.
 
 The leave-one-out errors behind these choices are in ``docs/atmosphere.md``.
 
@@ -66,6 +75,7 @@ from ._metadata import named
 from .constants import EARTH_RADIUS
 from .flags import flag, flag_attrs
 from .geometry import slant_range, target_elevation_angle
+from .quadrature import _legendre
 from .units import in_units
 
 __all__ = [
@@ -110,9 +120,12 @@ _RULES = MappingProxyType({
     "log-linear": ("log", "log_altitude", "log"),
     "same-elevation": ("log", "log_altitude", "log"),  # the path radiances and the fallback
     "optical-depth-cubic": ("log", "log_altitude", "log"),  # likewise
+    "extinction-profile": ("log", "log_altitude", "log"),  # likewise
 })
 #: Interpolations that follow the line of sight between altitude tables.
-_ALONG_SIGHT = ("same-elevation", "optical-depth-cubic")
+_ALONG_SIGHT = ("same-elevation", "optical-depth-cubic", "extinction-profile")
+#: Those among them that use the cubic through four tables.
+_CUBIC = ("optical-depth-cubic", "extinction-profile")
 #: Components that the line-of-sight rules interpolate along it (indices of
 #: TRANS, SURF_EMIS, GRND_RFLT: attenuated along the path; the path radiances are not).
 _ALONG_PATH = (0, 2, 4)
@@ -127,6 +140,10 @@ _FILE_CHUNKS = MappingProxyType({})  # xarray: use the file's chunks
 #: Values per component gathered at a time in the kernel: a block's temporaries (~0.5 MB
 #: each) stay in cache; 2**16 is 1.5-2x faster per scenario than 2**21 (measured).
 _BLOCK = 1 << 16
+#: Gauss-Legendre nodes of the extinction profile's integrals (its exponent is a quadratic
+#: with coefficients below 10 on this database: 12 nodes solve for it, 8 integrate it, both
+#: to double precision).
+_PROFILE_FIT_NODES, _PROFILE_NODES = 12, 8
 
 
 def database_path(path=None) -> Path:
@@ -235,6 +252,11 @@ class _Database:
     cube: np.ndarray  # (visibility, altitude, ground_range, component, wavelength)
     present: np.ndarray  # (visibility, altitude, ground_range) bool
 
+    @functools.cached_property
+    def extinction_profile(self) -> _ExtinctionProfile:
+        """The vertical extinction between the tables (computed once per database)."""
+        return _extinction_profile(self)
+
 
 @functools.lru_cache(maxsize=4)
 def _load_database(path: str) -> _Database:
@@ -276,6 +298,91 @@ def database_wavelengths(path=None) -> np.ndarray:
         The ``wavelength`` coordinate (read once per process with the database). [m]
     """
     return _load_database(str(database_path(path))).wavelength
+
+
+class _ExtinctionProfile(NamedTuple):
+    """Vertical extinction between the altitude tables, from their nadir columns.
+
+    Interval ``i`` spans ``heights[i]`` to ``heights[i + 1]`` (the ground, then every
+    table up to 24.5 km). Inside it the extinction is proportional to
+    ``exp(slope * s + bulge * s * (1 - s))``, ``s`` the fraction of the interval's height,
+    with ``mean`` that function's mean over the interval; ``exists`` where the profile
+    could be built. Arrays (visibility, interval, wavelength).
+    """
+
+    heights: np.ndarray
+    slope: np.ndarray
+    bulge: np.ndarray
+    mean: np.ndarray
+    exists: np.ndarray
+
+    def window(self, window) -> _ExtinctionProfile:
+        """The profile at the wavelengths ``window``."""
+        return self._replace(**{f: getattr(self, f)[..., window] for f in self._fields[1:]})
+
+
+def _interval_ends(mean):
+    """Extinction at the bottom and top of each interval from the intervals' means.
+
+    Akima's weights: at the node between intervals ``i - 1`` and ``i`` the value leans to
+    the side whose means change less (``|k[i+1] - k[i]|`` weighs ``k[i-1]``,
+    ``|k[i-1] - k[i-2]|`` weighs ``k[i]``), so a layer of uniform extinction keeps its
+    value up to its edge; the plain average where both weights are 0. Beyond the first
+    and last interval the end means are repeated. ``mean`` (visibility, interval,
+    wavelength).
+    """
+    last = mean.shape[1] - 1
+    i = np.arange(last + 1)
+
+    def k(j):
+        return mean[:, np.clip(j, 0, last)]
+
+    def at_node(below2, below, above, above2):
+        lean_below, lean_above = np.abs(above2 - above), np.abs(below - below2)
+        total = lean_below + lean_above
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(total > 0.0, (lean_below * below + lean_above * above) / total,
+                            0.5 * (below + above))
+
+    return at_node(k(i - 2), k(i - 1), k(i), k(i + 1)), at_node(k(i - 1), k(i), k(i + 1),
+                                                                   k(i + 2))
+
+
+def _extinction_profile(db) -> _ExtinctionProfile:
+    """The extinction profile of ``"extinction-profile"`` from ``db``'s nadir columns.
+
+    The nadir entry of each table gives the vertical optical depth from the ground,
+    -ln TRANS, so each interval's mean extinction is known; the extinction at its ends
+    comes from :func:`_interval_ends`. Inside, ln(extinction) is the straight line between
+    the ends plus ``bulge * s * (1 - s)``, with ``bulge`` solved (Newton) so the mean is
+    the interval's: a boundary layer that stays uniform and then drops inside an interval
+    gets a positive bulge. Where a mean or an end is not positive and finite (TRANS 0 at
+    the database floor) or the solve does not converge, ``exists`` is False. Only the
+    tables in ``db`` are used (the leave-one-out recipe removes some).
+    """
+    tables = db.altitude <= _GAP[0]
+    heights = np.concatenate(([0.0], db.altitude[tables]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        depth = -np.log(db.cube[:, tables, 0, 0, :].astype(np.float64))
+        depth = np.concatenate((np.zeros_like(depth[:, :1]), depth), axis=1)
+        mean = np.diff(depth, axis=1) / np.diff(heights)[:, None]
+        bottom, top = _interval_ends(mean)
+        exists = np.isfinite(mean + bottom + top) & (mean > 0.0) & (bottom > 0.0) & (top > 0.0)
+        slope = np.where(exists, np.log(top / bottom), 0.0)
+        relative = np.where(exists, mean / bottom, 1.0)  # the mean of exp(slope s + bulge ...)
+    nodes, weights = _legendre(_PROFILE_FIT_NODES)
+    s = 0.5 * (nodes + 1.0)
+    s_bulge, weights = s * (1.0 - s), 0.5 * weights
+    bulge = np.zeros_like(slope)
+    for _ in range(40):  # convex and increasing in the bulge: Newton from 0 (about 6 steps)
+        g = np.exp(slope[..., None] * s + bulge[..., None] * s_bulge)
+        miss = g @ weights - relative
+        converged = np.abs(miss) <= 1e-12 * relative
+        if converged.all():
+            break
+        bulge = np.clip(bulge - miss / ((g * s_bulge) @ weights), -30.0, 30.0)
+    exists &= converged
+    return _ExtinctionProfile(heights, slope, np.where(exists, bulge, 0.0), relative, exists)
 
 
 def _bracket(values, nodes, log=False):
@@ -401,17 +508,32 @@ def _optical_path_above(altitude, sin_elevation):
     return erfcx(np.sqrt(inside)) * np.exp(-altitude / SCALE_HEIGHT)
 
 
+class _Nadir(NamedTuple):
+    """The cubic's four tables seen from straight above (``"extinction-profile"``).
+
+    ``x`` (scenario, 4) the nodes' optical-path coordinate at nadir, ``weight`` the
+    scenario's weight in it, ``outer`` (scenario, 3) as :class:`_Sight`'s, ``position``
+    the scenario's fraction of the height between the bracketing tables.
+    """
+
+    x: np.ndarray
+    weight: np.ndarray
+    outer: np.ndarray
+    position: np.ndarray
+
+
 class _Sight(NamedTuple):
     """The line-of-sight rules' tables of each scenario (numpy arrays).
 
     ``tables`` holds the altitude index and the ground-range bracket ``(a, g0, g1, wg)``,
     each (scenario, table), of the tables read at the scenario's target elevation angle:
-    the lower and upper brackets, then for ``"optical-depth-cubic"`` the table below and
+    the lower and upper brackets, then for the cubic rules the table below and
     the table above them. ``weight`` is the scenario's altitude weight in the
     optical-path coordinate, ``usable`` where both brackets can be read along the line of
     sight. For the cubic, ``outer`` (scenario, 3) says whether each outer table is usable
     and whether the lower outer node is the ground, and ``x`` (scenario, 4) is the
     optical-path coordinate of the four nodes; both None for ``"same-elevation"``.
+    ``nadir`` is the same stencil at nadir for ``"extinction-profile"``, else None.
     """
 
     tables: tuple
@@ -419,14 +541,16 @@ class _Sight(NamedTuple):
     usable: np.ndarray
     outer: np.ndarray | None
     x: np.ndarray | None
+    nadir: _Nadir | None
 
     def block(self, s: slice) -> _Sight:
         """The scenarios ``s`` of every field."""
+        nadir = None if self.nadir is None else _Nadir(*(f[s] for f in self.nadir))
         return _Sight(tuple(t[s] for t in self.tables), self.weight[s], self.usable[s],
-                      *(None if f is None else f[s] for f in (self.outer, self.x)))
+                      *(None if f is None else f[s] for f in (self.outer, self.x)), nadir)
 
 
-def _along_sight(altitude, ground_range, vis, alt, db, cubic):
+def _along_sight(altitude, ground_range, vis, alt, db, interpolation):
     """Tables, weight and usability of the line-of-sight rules (numpy kernel).
 
     Each table is read where a sensor at its altitude sees the target at the scenario's
@@ -437,6 +561,7 @@ def _along_sight(altitude, ground_range, vis, alt, db, cubic):
     out of the cubic (a one-sided slope).
     """
     a0, a1, _ = alt
+    cubic = interpolation in _CUBIC
     top = db.altitude.size - 1
     elevation = target_elevation_angle(slant_range(ground_range, altitude), altitude)
     sin_e, cos_e = np.sin(elevation)[:, None], np.cos(elevation)[:, None]
@@ -456,15 +581,34 @@ def _along_sight(altitude, ground_range, vis, alt, db, cubic):
     ground = a0 == 0
     if cubic:
         heights += [np.where(ground, 0.0, node[:, 2]), node[:, 3]]
-    path = _optical_path_above(np.stack(heights, axis=1), sin_e)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        weight = np.where(a0 == a1, 0.0, (path[:, 0] - path[:, 1]) / (path[:, 0] - path[:, 2]))
+    heights = np.stack(heights, axis=1)
+    x, weight = _optical_path_nodes(heights, sin_e, a0 == a1)
     if not cubic:
-        return _Sight((a, g0, g1, wg), weight, usable, None, None)
+        return _Sight((a, g0, g1, wg), weight, usable, None, None, None)
     exists = (~ground, (index[:, 3] <= top) & (node[:, 3] <= _GAP[0]))
     outer = np.stack((exists[0] & covered[:, 2], exists[1] & covered[:, 3], ground), axis=1)
-    x = -path[:, [3, 0, 2, 4]]
-    return _Sight((a, g0, g1, wg), weight, usable, outer, x)
+    nadir = None
+    if interpolation == "extinction-profile":
+        x_up, weight_up = _optical_path_nodes(heights, np.ones_like(sin_e), a0 == a1)
+        with np.errstate(divide="ignore", invalid="ignore"):  # 0 / 0 on a node
+            position = np.where(a0 == a1, 0.0,
+                                (altitude - node[:, 0]) / (node[:, 1] - node[:, 0]))
+        nadir = _Nadir(x_up, weight_up, np.stack((*exists, ground), axis=1), position)
+    return _Sight((a, g0, g1, wg), weight, usable, outer, x, nadir)
+
+
+def _optical_path_nodes(heights, sin_e, on_node):
+    """Optical-path coordinate of the cubic's nodes and the scenario's weight in it.
+
+    ``heights`` (scenario, 3 or 5): lower bracket, the scenario, upper bracket (, the
+    node below, the node above). Returns the coordinate (scenario, 4) of below, lower,
+    upper, above (None with three heights) and the weight (0 on a node).
+    """
+    path = _optical_path_above(heights, sin_e)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        weight = np.where(on_node, 0.0, (path[:, 0] - path[:, 1]) / (path[:, 0] - path[:, 2]))
+    x = -path[:, [3, 0, 2, 4]] if heights.shape[1] == 5 else None
+    return x, weight
 
 
 def _pchip_interior_slope(h_left, h_right, s_left, s_right):
@@ -490,49 +634,90 @@ def _pchip_end_slope(h_near, h_far, s_near, s_far):
     return np.where(overshoot, 3.0 * s_near, d)
 
 
+def _cubic_increment(y, x, t, left, right):
+    """Monotone cubic Hermite increment over ``y[1]`` at weight ``t`` of [x1, x2] (numpy).
+
+    ``y`` and ``x`` are the four nodes (below, lower bracket, upper bracket, above);
+    PCHIP slopes from the outer nodes where ``left`` / ``right``, one-sided where only
+    one of them is, the secant without either. All arguments broadcast together.
+    """
+    h0, h1, h2 = x[1] - x[0], x[2] - x[1], x[3] - x[2]
+    rise = y[2] - y[1]
+    s0, s1, s2 = (y[1] - y[0]) / h0, rise / h1, (y[3] - y[2]) / h2
+    d1 = np.where(left, _pchip_interior_slope(h0, h1, s0, s1),
+                  np.where(right, _pchip_end_slope(h1, h2, s1, s2), s1))
+    d2 = np.where(right, _pchip_interior_slope(h1, h2, s1, s2),
+                  np.where(left, _pchip_end_slope(h1, h0, s1, s0), s1))
+    t2, t3 = t * t, t * t * t
+    return (t3 - 2.0 * t2 + t) * h1 * d1 + (-2.0 * t3 + 3.0 * t2) * rise + (t3 - t2) * h1 * d2
+
+
 @np.errstate(divide="ignore", invalid="ignore", over="ignore")
-def _optical_depth_cubic(base, low, high, beyond, usable, x, t, on_node):
-    """``"optical-depth-cubic"`` values of TRANS, SURF_EMIS, GRND_RFLT (numpy kernel).
+def _optical_depth_cubic(base, low, high, beyond, sight, on_node, scale=None):
+    """The cubic rules' values of TRANS, SURF_EMIS, GRND_RFLT (numpy kernel).
 
     ``base`` is ``"same-elevation"``'s result (scenario, component, wavelength); ``low``
     and ``high`` the bracketing tables' same-elevation spectra, ``beyond`` the
-    logarithms of the outer tables' (below, above); ``usable`` (scenario, 3) whether
-    each outer table is usable and whether the lower outer node is the ground; ``x``
-    (scenario, 4) the nodes' optical-path coordinate and ``t`` the scenario's weight in
-    it (``"same-elevation"``'s).
+    logarithms of the outer tables' (below, above); ``sight`` the scenarios'
+    :class:`_Sight` (its ``outer``, ``x`` and ``weight``).
 
     The logarithm of each value (-ln TRANS is the line of sight's optical depth, 0 at
     the ground) is a monotone cubic Hermite (PCHIP) between the brackets with slopes
     from the outer nodes: one-sided where an outer node is missing, unusable or has a
     zero value (TRANS at the database floor), the secant without either. For TRANS the
     ground is the lower outer node below the lowest table; SURF_EMIS and GRND_RFLT have
-    no ground node. Returns ``low * exp(increment)``; on an altitude node, and where the
-    result is not finite and positive (a zero bracketing value), ``base``.
+    no ground node. ``scale`` (scenario, wavelength), if given, multiplies the increment
+    (``"extinction-profile"``). Returns ``low * exp(increment)``; on an altitude node,
+    and where the result is not finite and positive (a zero bracketing value), ``base``.
     """
-    logs = (beyond[0], np.log(low), np.log(high), beyond[1])
+    usable = sight.outer
     ground = usable[:, 2, None, None]
     along_trans = np.zeros(base.shape[1:], dtype=bool)
     along_trans[0] = True  # TRANS is the first of _ALONG_PATH
-    y0 = np.where(ground & along_trans, 0.0, logs[0])
-    y1, y2, y3 = logs[1:]
+    y0 = np.where(ground & along_trans, 0.0, beyond[0])
     left = np.where(along_trans, usable[:, 0, None, None] | ground,
                     usable[:, 0, None, None]) & np.isfinite(y0)
-    right = usable[:, 1, None, None] & np.isfinite(y3)
-    X = [x[:, k, None, None] for k in range(4)]
-    h0, h1, h2 = X[1] - X[0], X[2] - X[1], X[3] - X[2]
-    rise = y2 - y1
-    s0, s1, s2 = (y1 - y0) / h0, rise / h1, (y3 - y2) / h2
-    d1 = np.where(left, _pchip_interior_slope(h0, h1, s0, s1),
-                  np.where(right, _pchip_end_slope(h1, h2, s1, s2), s1))
-    d2 = np.where(right, _pchip_interior_slope(h1, h2, s1, s2),
-                  np.where(left, _pchip_end_slope(h1, h0, s1, s0), s1))
-    w = t[:, None, None]
-    w2, w3 = w * w, w * w * w
-    step = ((w3 - 2.0 * w2 + w) * h1 * d1 + (-2.0 * w3 + 3.0 * w2) * rise
-            + (w3 - w2) * h1 * d2)
+    right = usable[:, 1, None, None] & np.isfinite(beyond[1])
+    step = _cubic_increment((y0, np.log(low), np.log(high), beyond[1]),
+                            [sight.x[:, k, None, None] for k in range(4)],
+                            sight.weight[:, None, None], left, right)
+    if scale is not None:
+        step *= scale[:, None, :]
     value = low * np.exp(step)
     good = ~on_node[:, None, None] & np.isfinite(value) & (value > 0.0)
     return np.where(good, value, base)
+
+
+@np.errstate(divide="ignore", invalid="ignore", over="ignore")
+def _profile_scale(cube, vis, a, nadir, profile):
+    """``"extinction-profile"``'s factor on the cubic's increment (scenario, wavelength).
+
+    Straight down, the extinction profile (:func:`_extinction_profile`) gives the optical
+    depth between the lower bracketing table and the scenario's altitude; the factor is
+    that over the cubic's own value at nadir (the same four tables' nadir entries, the
+    same coordinate at sin e = 1). 1 on a node and where the profile does not exist or
+    the factor is not finite and positive. ``a`` (table, scenario) as in
+    :func:`_line_of_sight`; ``profile`` at the kernel's wavelengths.
+    """
+    ln_t = np.log(cube[vis, a, 0, 0].astype(np.float64))  # nadir TRANS (table, scenario, wl)
+    outer = nadir.outer
+    ground = outer[:, 2, None]
+    y0 = np.where(ground, 0.0, ln_t[2])
+    step = _cubic_increment((y0, ln_t[0], ln_t[1], ln_t[3]),
+                            [nadir.x[:, k, None] for k in range(4)], nadir.weight[:, None],
+                            (outer[:, 0, None] | ground) & np.isfinite(y0),
+                            outer[:, 1, None] & np.isfinite(ln_t[3]))
+    # the profile's intervals start at the ground; from 24.5 km up the scenario is on a
+    # node or falls back, so any interval will do
+    interval = np.minimum(a[0] + 1, profile.slope.shape[1] - 1)
+    slope, bulge, mean, exists = (f[vis, interval] for f in profile[1:])
+    nodes, weights = _legendre(_PROFILE_NODES)
+    t = nadir.position[:, None, None]
+    s = 0.5 * t * (nodes + 1.0)  # (scenario, 1, node): Gauss-Legendre on [0, t]
+    inside = np.exp(slope[..., None] * s + bulge[..., None] * (s * (1.0 - s))) @ weights
+    fraction = 0.5 * nadir.position[:, None] * inside / mean
+    factor = fraction * (ln_t[1] - ln_t[0]) / step
+    return np.where(exists & np.isfinite(factor) & (factor > 0.0), factor, 1.0)
 
 
 def _scenarios(altitude, ground_range, visibility, interpolation, db):
@@ -553,8 +738,7 @@ def _scenarios(altitude, ground_range, visibility, interpolation, db):
     complete = p[vis, a0, g0] & p[vis, a1, g0] & p[vis, a0, g1] & p[vis, a1, g1]
     along = None
     if interpolation in _ALONG_SIGHT:
-        along = _along_sight(altitude, ground_range, vis, alt, db,
-                             cubic=interpolation == "optical-depth-cubic")
+        along = _along_sight(altitude, ground_range, vis, alt, db, interpolation)
         # never finite where others are NaN
         along = along._replace(usable=along.usable & complete)
     return shape, altitude, vis, alt, gr, complete, along
@@ -614,14 +798,15 @@ def _fixed_range(cube, vis, alt, gr, rules, components=None):
     return _interp(by_range[0], by_range[1], wg, rules[1])
 
 
-def _line_of_sight(cube, vis, sight, fixed_range):
+def _line_of_sight(cube, vis, sight, fixed_range, profile=None):
     """TRANS, SURF_EMIS, GRND_RFLT of the line-of-sight rules (numpy kernel).
 
     Ground range log-linear inside each table, then altitude along the line of sight:
     log-linear in the optical-path coordinate (``"same-elevation"``) or the cubic
-    (``"optical-depth-cubic"``, :func:`_optical_depth_cubic`). ``fixed_range(components,
-    where)`` gives the fixed-range rule's values, taken where the line of sight leaves
-    a table.
+    (``"optical-depth-cubic"``, :func:`_optical_depth_cubic`; ``"extinction-profile"``
+    scales its increment by :func:`_profile_scale` of ``profile``).
+    ``fixed_range(components, where)`` gives the fixed-range rule's values, taken where
+    the line of sight leaves a table.
     """
     a, g0, g1, wg = (t.T for t in sight.tables)  # (table, scenario)
     brackets = slice(0, 2)
@@ -633,8 +818,9 @@ def _line_of_sight(cube, vis, sight, fixed_range):
         outer = slice(2, 4)
         beyond = _ln_interp(_gather(cube, vis, a[outer], g0[outer], _ALONG_PATH),
                             _gather(cube, vis, a[outer], g1[outer], _ALONG_PATH), wg[outer])
-        out = _optical_depth_cubic(out, low, high, beyond, sight.outer, sight.x, sight.weight,
-                                   a[0] == a[1])
+        scale = None if sight.nadir is None else _profile_scale(cube, vis, a, sight.nadir,
+                                                                 profile)
+        out = _optical_depth_cubic(out, low, high, beyond, sight, a[0] == a[1], scale)
     fallback = ~sight.usable
     if fallback.any():  # the fixed-range rule where the line of sight leaves a table
         out[fallback] = fixed_range(_ALONG_PATH, fallback)
@@ -646,6 +832,9 @@ def _spectra_of(db, scenarios, interpolation, window):
     shape, _, vis, alt, gr, _, along = scenarios
     alt_rule, _, gr_rule = _RULES[interpolation]
     cube = db.cube[..., window]
+    profile = None
+    if along is not None and along.nadir is not None:
+        profile = db.extinction_profile.window(window)
     n_comp, n_wl = cube.shape[-2:]
     out = np.empty((vis.size, n_comp, n_wl), dtype=np.float64)
     step = max(1, _BLOCK // max(1, n_comp * n_wl))
@@ -660,7 +849,8 @@ def _spectra_of(db, scenarios, interpolation, window):
             out[s] = fixed_range(None)
             continue
         out[s][:, _ACROSS_PATH] = fixed_range(_ACROSS_PATH)
-        out[s][:, _ALONG_PATH] = _line_of_sight(cube, vis[s], along.block(s), fixed_range)
+        out[s][:, _ALONG_PATH] = _line_of_sight(cube, vis[s], along.block(s), fixed_range,
+                                                profile)
     return out.reshape(shape + (n_comp, n_wl))
 
 

@@ -118,7 +118,8 @@ FLAGS = MappingProxyType({
     ),
     "atmosphere_fallback": (
         1048576,
-        "atmosphere_interpolation='same-elevation' or 'optical-depth-cubic' could not follow "
+        "atmosphere_interpolation='same-elevation', 'optical-depth-cubic' or "
+        "'extinction-profile' could not follow "
         "the line of sight to "
         "both bracketing altitude tables (horizon or end of a table's coverage): the "
         "atmosphere was interpolated at fixed ground range ('log-linear') instead",
