@@ -15,6 +15,7 @@ import pytest
 import xarray as xr
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.integrate import quad
 
 from xbsm import atmosphere as atm
 from xbsm import geometry
@@ -309,6 +310,57 @@ def test_extinction_profile_meets_three_percent_in_the_altitude_leave_one_out(db
     assert profile.size == cubic.size > 5000
     assert np.percentile(profile, 95) <= 0.03
     assert np.median(profile) <= np.median(cubic)
+
+
+@pytest.mark.parametrize(("altitude", "visibility", "wavelength"), [
+    (1500.0, 5.0, 0.6e-6), (700.0, 23.0, 1.0e-6), (12500.0, 23.0, 10.0e-6)])
+def test_extinction_profile_at_nadir_is_the_profile_integral(db, altitude, visibility,
+                                                            wavelength):
+    # straight down, the rule's optical depth above the lower table is the integral of the
+    # interval's extinction profile (here by scipy's adaptive quad, not the kernel's
+    # Gauss-Legendre rule), and the profile's mean over the interval is the one the two
+    # tables' nadir transmittances give
+    profile = db.extinction_profile
+    w = int(np.argmin(np.abs(db.wavelength - wavelength)))
+    v = int(np.flatnonzero(db.visibility == visibility)[0])
+    lower = int(np.searchsorted(db.altitude, altitude)) - 1
+    interval = lower + 1  # the profile's intervals start at the ground
+    assert profile.heights[interval] == db.altitude[lower]
+    slope, bulge, mean, exists = (f[v, interval, w] for f in profile[1:])
+    assert exists
+
+    def shape(s):
+        return np.exp(slope * s + bulge * s * (1.0 - s))
+
+    whole = quad(shape, 0.0, 1.0, epsabs=0, epsrel=1e-13)[0]
+    np.testing.assert_allclose(whole, mean, rtol=1e-12)
+    s = (altitude - db.altitude[lower]) / (db.altitude[lower + 1] - db.altitude[lower])
+    fraction = quad(shape, 0.0, s, epsabs=0, epsrel=1e-13)[0] / whole
+    depth = -np.log(db.cube[v, [lower, lower + 1], 0, 0, w].astype(np.float64))
+    out = atm.atmosphere_at(altitude, 0.0, visibility, interpolation="extinction-profile",
+                            wavelength_bounds=(db.wavelength[w], db.wavelength[w]))
+    np.testing.assert_allclose(out["transmission"].values,
+                               [np.exp(-(depth[0] + fraction * (depth[1] - depth[0])))],
+                               rtol=1e-12)
+
+
+def test_extinction_profile_factor_shared_across_ground_ranges_equals_each_its_own(db):
+    # the nadir factor depends on (visibility, altitude) only and is computed once per
+    # distinct pair: a sweep over ground range gives what each scenario gives alone
+    rng = np.random.default_rng(5)
+    altitude = np.repeat([150.0, 1500.0, 2500.0, 7300.0], 25)
+    ground_range = rng.uniform(0.0, 60e3, altitude.size)
+    visibility = np.tile([5.0, 23.0], altitude.size // 2)
+    window = atm._wavelength_window(db.wavelength, (0.4e-6, 2.5e-6))
+    together = atm._interpolate_database(db, altitude, ground_range, visibility,
+                                         "extinction-profile", window)
+    alone = np.stack([atm._interpolate_database(db, altitude[i:i + 1], ground_range[i:i + 1],
+                                                visibility[i:i + 1], "extinction-profile",
+                                                window)[0] for i in range(altitude.size)])
+    np.testing.assert_allclose(together, alone, rtol=1e-13, atol=0)
+    cubic = atm._interpolate_database(db, altitude, ground_range, visibility,
+                                      "optical-depth-cubic", window)
+    assert not np.allclose(together, cubic, rtol=1e-3)  # the factor is not 1
 
 
 def test_same_elevation_equals_log_linear_at_database_altitudes(db):

@@ -688,7 +688,6 @@ def _optical_depth_cubic(base, low, high, beyond, sight, on_node, scale=None):
     return np.where(good, value, base)
 
 
-@np.errstate(divide="ignore", invalid="ignore", over="ignore")
 def _profile_scale(cube, vis, a, nadir, profile):
     """``"extinction-profile"``'s factor on the cubic's increment (scenario, wavelength).
 
@@ -697,8 +696,22 @@ def _profile_scale(cube, vis, a, nadir, profile):
     that over the cubic's own value at nadir (the same four tables' nadir entries, the
     same coordinate at sin e = 1). 1 on a node and where the profile does not exist or
     the factor is not finite and positive. ``a`` (table, scenario) as in
-    :func:`_line_of_sight`; ``profile`` at the kernel's wavelengths.
+    :func:`_line_of_sight`; ``profile`` at the kernel's wavelengths. The factor depends
+    on the visibility and the altitude only, so it is computed once for each distinct
+    pair (a sweep over ground range shares it).
     """
+    key = np.stack((vis, a[0], a[1], nadir.position))
+    _, first, inverse = np.unique(key, axis=1, return_index=True, return_inverse=True)
+    if first.size == vis.size:
+        return _nadir_factor(cube, vis, a, nadir, profile)
+    factor = _nadir_factor(cube, vis[first], a[:, first], _Nadir(*(f[first] for f in nadir)),
+                           profile)
+    return factor[inverse.reshape(-1)]
+
+
+@np.errstate(divide="ignore", invalid="ignore", over="ignore")
+def _nadir_factor(cube, vis, a, nadir, profile):
+    """:func:`_profile_scale` of each scenario given."""
     ln_t = np.log(cube[vis, a, 0, 0].astype(np.float64))  # nadir TRANS (table, scenario, wl)
     outer = nadir.outer
     ground = outer[:, 2, None]
