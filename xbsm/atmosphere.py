@@ -700,6 +700,8 @@ def _profile_scale(cube, vis, a, nadir, profile):
     on the visibility and the altitude only, so it is computed once for each distinct
     pair (a sweep over ground range shares it).
     """
+    if vis.size < 2:
+        return _nadir_factor(cube, vis, a, nadir, profile)
     key = np.stack((vis, a[0], a[1], nadir.position))
     _, first, inverse = np.unique(key, axis=1, return_index=True, return_inverse=True)
     if first.size == vis.size:
