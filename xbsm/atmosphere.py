@@ -727,10 +727,10 @@ def _nadir_factor(cube, vis, a, nadir, profile):
     interval = np.minimum(a[0] + 1, profile.slope.shape[1] - 1)
     slope, bulge, mean, exists = (f[vis, interval] for f in profile[1:])
     nodes, weights = _legendre(_PROFILE_NODES)
-    t = nadir.position[:, None, None]
-    s = 0.5 * t * (nodes + 1.0)  # (scenario, 1, node): Gauss-Legendre on [0, t]
+    position = nadir.position[:, None]
+    s = 0.5 * position[..., None] * (nodes + 1.0)  # Gauss-Legendre on [0, position]
     inside = np.exp(slope[..., None] * s + bulge[..., None] * (s * (1.0 - s))) @ weights
-    fraction = 0.5 * nadir.position[:, None] * inside / mean
+    fraction = 0.5 * position * inside / mean  # of the interval's nadir optical depth
     factor = fraction * (ln_t[1] - ln_t[0]) / step
     return np.where(exists & np.isfinite(factor) & (factor > 0.0), factor, 1.0)
 
