@@ -326,7 +326,8 @@ def test_extinction_profile_at_nadir_is_the_profile_integral(db, altitude, visib
     lower = int(np.searchsorted(db.altitude, altitude)) - 1
     interval = lower + 1  # the profile's intervals start at the ground
     assert profile.heights[interval] == db.altitude[lower]
-    slope, bulge, mean, exists = (f[v, interval, w] for f in profile[1:])
+    slope, bulge, mean, exists = (getattr(profile, f)[v, interval, w]
+                                  for f in ("slope", "bulge", "mean", "exists"))
     assert exists
 
     def shape(s):

@@ -307,10 +307,12 @@ class _ExtinctionProfile(NamedTuple):
     table up to 24.5 km). Inside it the extinction is proportional to
     ``exp(slope * s + bulge * s * (1 - s))``, ``s`` the fraction of the interval's height,
     with ``mean`` that function's mean over the interval; ``exists`` where the profile
-    could be built. Arrays (visibility, interval, wavelength).
+    could be built. Arrays (visibility, interval, wavelength); ``depth`` (visibility,
+    height, wavelength) is the nadir optical depth at each height.
     """
 
     heights: np.ndarray
+    depth: np.ndarray
     slope: np.ndarray
     bulge: np.ndarray
     mean: np.ndarray
@@ -382,7 +384,8 @@ def _extinction_profile(db) -> _ExtinctionProfile:
             break
         bulge = np.clip(bulge - miss / ((g * s_bulge) @ weights), -30.0, 30.0)
     exists &= converged
-    return _ExtinctionProfile(heights, slope, np.where(exists, bulge, 0.0), relative, exists)
+    return _ExtinctionProfile(heights, depth, slope, np.where(exists, bulge, 0.0), relative,
+                              exists)
 
 
 def _bracket(values, nodes, log=False):
@@ -688,7 +691,7 @@ def _optical_depth_cubic(base, low, high, beyond, sight, on_node, scale=None):
     return np.where(good, value, base)
 
 
-def _profile_scale(cube, vis, a, nadir, profile):
+def _profile_scale(vis, a, nadir, profile):
     """``"extinction-profile"``'s factor on the cubic's increment (scenario, wavelength).
 
     Straight down, the extinction profile (:func:`_extinction_profile`) gives the optical
@@ -701,20 +704,21 @@ def _profile_scale(cube, vis, a, nadir, profile):
     pair (a sweep over ground range shares it).
     """
     if vis.size < 2:
-        return _nadir_factor(cube, vis, a, nadir, profile)
+        return _nadir_factor(vis, a, nadir, profile)
     key = np.stack((vis, a[0], a[1], nadir.position))
     _, first, inverse = np.unique(key, axis=1, return_index=True, return_inverse=True)
     if first.size == vis.size:
-        return _nadir_factor(cube, vis, a, nadir, profile)
-    factor = _nadir_factor(cube, vis[first], a[:, first], _Nadir(*(f[first] for f in nadir)),
-                           profile)
+        return _nadir_factor(vis, a, nadir, profile)
+    factor = _nadir_factor(vis[first], a[:, first], _Nadir(*(f[first] for f in nadir)), profile)
     return factor[inverse.reshape(-1)]
 
 
 @np.errstate(divide="ignore", invalid="ignore", over="ignore")
-def _nadir_factor(cube, vis, a, nadir, profile):
+def _nadir_factor(vis, a, nadir, profile):
     """:func:`_profile_scale` of each scenario given."""
-    ln_t = np.log(cube[vis, a, 0, 0].astype(np.float64))  # nadir TRANS (table, scenario, wl)
+    # ln of nadir TRANS (table, scenario, wavelength); a table above 24.5 km (only ever an
+    # outer one, left out of the cubic) reads the last height's
+    ln_t = -profile.depth[vis, np.minimum(a + 1, profile.heights.size - 1)]
     outer = nadir.outer
     ground = outer[:, 2, None]
     y0 = np.where(ground, 0.0, ln_t[2])
@@ -725,7 +729,8 @@ def _nadir_factor(cube, vis, a, nadir, profile):
     # the profile's intervals start at the ground; from 24.5 km up the scenario is on a
     # node or falls back, so any interval will do
     interval = np.minimum(a[0] + 1, profile.slope.shape[1] - 1)
-    slope, bulge, mean, exists = (f[vis, interval] for f in profile[1:])
+    slope, bulge, mean, exists = (f[vis, interval] for f in (profile.slope, profile.bulge,
+                                                             profile.mean, profile.exists))
     nodes, weights = _legendre(_PROFILE_NODES)
     position = nadir.position[:, None]
     s = 0.5 * position[..., None] * (nodes + 1.0)  # Gauss-Legendre on [0, position]
@@ -833,8 +838,7 @@ def _line_of_sight(cube, vis, sight, fixed_range, profile=None):
         outer = slice(2, 4)
         beyond = _ln_interp(_gather(cube, vis, a[outer], g0[outer], _ALONG_PATH),
                             _gather(cube, vis, a[outer], g1[outer], _ALONG_PATH), wg[outer])
-        scale = None if sight.nadir is None else _profile_scale(cube, vis, a, sight.nadir,
-                                                                 profile)
+        scale = None if sight.nadir is None else _profile_scale(vis, a, sight.nadir, profile)
         out = _optical_depth_cubic(out, low, high, beyond, sight, a[0] == a[1], scale)
     fallback = ~sight.usable
     if fallback.any():  # the fixed-range rule where the line of sight leaves a table
