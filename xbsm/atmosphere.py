@@ -915,9 +915,10 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation="log-line
         Ground range from the sensor nadir point to the target, within [0, 300000]. [m]
     visibility : float or xr.DataArray
         Meteorological range: 23 (MODTRAN IHAZE 1) or 5 (IHAZE 2). [km]
-    interpolation : {"log-linear", "linear", "exact", "same-elevation", "optical-depth-cubic"}
+    interpolation : {"log-linear", "linear", "exact", "same-elevation", "optical-depth-cubic", \
+"extinction-profile"}
         Rule between database nodes; see the module docstring. The model's presets
-        use "optical-depth-cubic" (``accurate``, ``fast``) and "linear" (``pybsm``).
+        use "extinction-profile" (``accurate``, ``fast``) and "linear" (``pybsm``).
     wavelength_bounds : tuple of float, optional
         ``(lo, hi)``: keep the database wavelengths ``lo <= w <= hi`` (exact float
         comparison, as pyBSM selects a band); only these are interpolated. [m]
