@@ -1,16 +1,21 @@
 """Studies: lazy build, safe resumable writing, range performance (xbsm.study)."""
 
+import math
+import os
+
 import dask
 import numpy as np
 import pytest
 import xarray as xr
+from dask.highlevelgraph import HighLevelGraph
 from scipy.stats import norm
 
 import xbsm
 import xbsm.cli
-from xbsm import study
+from xbsm import interrupts, study
 from xbsm.examples import olson_scenario, olson_sensor
-from xbsm.study import store
+from xbsm.study import _parts, store
+from xbsm.study._lock import OutputLock
 
 TINY = """
 title = "tiny"
@@ -79,28 +84,37 @@ def test_study_equals_the_direct_model_call(tiny, tmp_path):
     assert not list(tmp_path.glob("*.parts")) and not list(tmp_path.glob("*.partial"))
 
 
+_SAVE = _parts.save  # the real chunk saver, before any test replaces it
+
+
+def _stop_after(count, saved):
+    """A chunk saver that saves ``count`` chunks, then stops as if Ctrl-C arrived."""
+    real = _SAVE
+
+    def save(file, arrays, print_):
+        if len(saved) == count:
+            raise KeyboardInterrupt
+        saved.append(file.name)
+        real(file, arrays, print_)
+
+    return save
+
+
 def test_rerun_computes_only_the_missing_chunks(tiny, tmp_path, monkeypatch):
     result = study.run(tiny)
     path = tmp_path / "out.nc"
     saved = []
-    real = store._save_block
-
-    def save_two_then_stop(block, file):
-        if len(saved) == 2:
-            raise KeyboardInterrupt  # as if Ctrl-C arrived after two chunks
-        saved.append(file.name)
-        real(block, file)
-
-    monkeypatch.setattr(store, "_save_block", save_two_then_stop)
-    with pytest.raises(KeyboardInterrupt), dask.config.set(scheduler="synchronous"):
+    monkeypatch.setattr(_parts, "save", _stop_after(2, saved))
+    with pytest.raises(KeyboardInterrupt):
         study.write(result, path, scheduler="synchronous")
     assert not path.exists() and len(list((tmp_path / "out.nc.parts").glob("*.npz"))) == 2
     resumed = []
-    monkeypatch.setattr(store, "_save_block", lambda b, f: (resumed.append(f.name), real(b, f)))
+    monkeypatch.setattr(_parts, "save", _stop_after(99, resumed))
     study.write(study.run(tiny), path, scheduler="synchronous")
     assert len(resumed) == 1 and resumed[0] not in saved  # 3 chunks: only the third computed
     with xr.open_dataset(path) as written:
         xr.testing.assert_equal(written.niirs, result.niirs.compute())
+    assert not (tmp_path / "out.nc.lock").exists()
 
 
 def test_an_interrupted_finish_leaves_no_output(tiny, tmp_path, monkeypatch):
@@ -115,7 +129,7 @@ def test_an_interrupted_finish_leaves_no_output(tiny, tmp_path, monkeypatch):
     assert len(list((tmp_path / "out.nc.parts").glob("*.npz"))) == 3  # work kept
 
 
-def test_parts_of_another_study_are_discarded(tiny, tmp_path):
+def test_parts_without_a_readable_fingerprint_are_set_aside(tiny, tmp_path, capsys):
     path = tmp_path / "out.nc"
     parts = tmp_path / "out.nc.parts"
     parts.mkdir()
@@ -124,6 +138,89 @@ def test_parts_of_another_study_are_discarded(tiny, tmp_path):
     study.write(study.run(tiny), path, scheduler="synchronous")
     with xr.open_dataset(path) as written:
         assert np.isfinite(written.niirs).all()
+    aside = list(tmp_path.glob("out.nc.parts.set-aside-*"))
+    assert len(aside) == 1 and (aside[0] / "block-0-0.npz").read_bytes() == b"stale"
+    assert "set aside" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("entry", "words"), [
+    ("atmosphere", "atmosphere database"), ("code", "xbsm's code"), ("numpy", "numpy version"),
+    ("xbsm", "xbsm version"), ("study", "study or its method")])
+def test_parts_of_another_fingerprint_are_set_aside_never_mixed(tiny, tmp_path, monkeypatch,
+                                                                capsys, entry, words):
+    # a run interrupted after two chunks, resumed with one input of the numbers changed:
+    # nothing of the first run may be reused, and one line says what differs
+    path = tmp_path / "out.nc"
+    first = []
+    monkeypatch.setattr(_parts, "save", _stop_after(2, first))
+    with pytest.raises(KeyboardInterrupt):
+        study.write(study.run(tiny), path, scheduler="synchronous")
+    real = _parts.fingerprint
+    monkeypatch.setattr(_parts, "fingerprint", lambda r: {**real(r), entry: "changed"})
+    second = []
+    monkeypatch.setattr(_parts, "save", _stop_after(99, second))
+    study.write(study.run(tiny), path, scheduler="synchronous")
+    assert len(second) == 3  # every chunk computed again
+    err = capsys.readouterr().err
+    assert words in err and "set aside" in err and len(err.strip().splitlines()) == 1
+    (aside,) = tmp_path.glob("out.nc.parts.set-aside-*")
+    assert sorted(f.name for f in aside.glob("block-*.npz")) == sorted(first)
+
+
+@pytest.mark.parametrize("damage", ["truncate", "flip"])
+def test_a_damaged_chunk_file_is_computed_again(tiny, tmp_path, monkeypatch, capsys, damage):
+    path = tmp_path / "out.nc"
+    first = []
+    monkeypatch.setattr(_parts, "save", _stop_after(2, first))
+    with pytest.raises(KeyboardInterrupt):
+        study.write(study.run(tiny), path, scheduler="synchronous")
+    victim = tmp_path / "out.nc.parts" / first[0]
+    data = bytearray(victim.read_bytes())
+    if damage == "truncate":
+        data = data[: len(data) // 2]
+    else:  # one bit of the stored SNR values (npz members are stored uncompressed)
+        with np.load(victim) as saved:
+            where = bytes(data).find(saved["snr"].tobytes())
+        assert where > 0
+        data[where + 3] ^= 0x10
+    victim.write_bytes(bytes(data))
+    second = []
+    monkeypatch.setattr(_parts, "save", _stop_after(99, second))
+    study.write(study.run(tiny), path, scheduler="synchronous")
+    assert len(second) == 2 and first[0] in second  # the damaged one and the never-saved one
+    assert "did not verify" in capsys.readouterr().err
+    with xr.open_dataset(path) as written:
+        xr.testing.assert_equal(written.niirs, study.run(tiny).niirs.compute())
+
+
+def test_a_second_writer_of_one_output_is_refused(tiny, tmp_path):
+    path = tmp_path / "out.nc"
+    with OutputLock(path, "study A"), pytest.raises(study.StudyError) as err:
+        study.write(study.run(tiny), path, scheduler="synchronous")
+    message = str(err.value)
+    assert f"process {os.getpid()}" in message and "study A" in message
+    assert "\n" not in message and not path.exists()
+
+
+def test_the_lock_of_a_dead_process_is_taken_over(tiny, tmp_path):
+    # a lock file left by a killed run: the kernel's lock died with its process
+    path = tmp_path / "out.nc"
+    (tmp_path / "out.nc.lock").write_text('{"pid": 999999999, "host": "h", "study": "s", '
+                                          '"started": "t"}')
+    study.write(study.run(tiny), path, scheduler="synchronous")
+    assert path.exists() and not (tmp_path / "out.nc.lock").exists()
+
+
+def test_setup_culls_the_graph_once_per_batch_not_per_chunk(tmp_path, monkeypatch):
+    # the review measured one cull per chunk (quadratic set-up); 40 chunks are one batch
+    spec = study.parse(TINY.replace("[0.0, 20000.0, 60000.0]",
+                                    "{ start = 0.0, stop = 60e3, num = 40 }"), "forty.toml")
+    calls = []
+    real = HighLevelGraph.cull
+    monkeypatch.setattr(HighLevelGraph, "cull", lambda self, keys: (calls.append(len(keys)),
+                                                                    real(self, keys))[1])
+    study.write(study.run(spec), tmp_path / "out.nc", scheduler="synchronous", workers=1)
+    assert len(calls) == math.ceil(40 / store._BATCH_PER_WORKER)
 
 
 def test_existing_output_needs_overwrite(tiny, tmp_path):
@@ -236,15 +333,18 @@ def test_default_study_layout_with_pybsm_numerics_reproduces_pybsm():
         np.testing.assert_allclose(point.values, expected, rtol=0, atol=1e-8)
 
 
-def test_a_swallowed_ctrl_c_still_stops_the_run(tiny, tmp_path):
-    # the command's Ctrl-C handler sets INTERRUPTED besides raising; a library that swallows
-    # the KeyboardInterrupt cannot keep the run going: it stops after the chunk being saved
-    result = study.run(tiny)
-    store.INTERRUPTED.set()
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            study.write(result, tmp_path / "out.nc", scheduler="synchronous")
-    finally:
-        store.INTERRUPTED.clear()
+def test_a_swallowed_ctrl_c_still_stops_the_run(tiny, tmp_path, monkeypatch):
+    # the Ctrl-C handler records the signal besides raising; a library that swallows the
+    # KeyboardInterrupt cannot keep the run going: it stops after the chunk being saved
+    real = _SAVE
+
+    def save_then_signal(file, arrays, print_):
+        real(file, arrays, print_)
+        interrupts.INTERRUPTED.set()  # as the handler does, its exception lost
+
+    monkeypatch.setattr(_parts, "save", save_then_signal)
+    with pytest.raises(KeyboardInterrupt):
+        study.write(study.run(tiny), tmp_path / "out.nc", scheduler="synchronous")
+    interrupts.INTERRUPTED.clear()
     assert not (tmp_path / "out.nc").exists()
     assert len(list((tmp_path / "out.nc.parts").glob("*.npz"))) == 1  # its work kept

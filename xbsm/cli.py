@@ -2,25 +2,24 @@
 
 ``xbsm run [STUDY.toml] [-o OUT.nc]`` runs a study file (by default the
 paper's first worked example, shipped with the package) lazily in chunks,
-writes the NetCDF safely (an interrupted run resumes; the output appears only
-when complete) and draws the standard figures. ``xbsm plot OUT.nc`` draws the
-figures of any result file; ``xbsm info`` prints the atmosphere database's
-coverage, the method presets and the versions.
+writes the NetCDF safely (one run per output; an interrupted run resumes; the
+output appears only when complete) and draws the standard figures. ``xbsm
+plot OUT.nc`` draws the figures of any result file; ``xbsm info`` prints the
+atmosphere database's coverage, the method presets and the versions.
+
+Every foreseeable failure is one line on standard error and exit code 2; a
+signal is exit code 130 (SIGINT, Ctrl-C) or 143 (SIGTERM) with finished work
+kept. The heavy imports happen after the signal handlers are in place, so even
+a Ctrl-C while Python imports numpy is one line.
 """
 
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
-from importlib import resources
 from pathlib import Path
 
-import xarray as xr
-
-from . import __version__, plot, study
-from .methods import PRESETS
-from .study.store import INTERRUPTED, check_output, dependency_versions, stop_if_interrupted
+from .interrupts import Interrupted, handling_signals, stop_if_interrupted
 
 #: The study ``xbsm run`` runs without a study file: the paper's Example 1 (Sec. 3).
 DEFAULT_STUDY = "example1.toml"
@@ -28,6 +27,8 @@ DEFAULT_STUDY = "example1.toml"
 
 def default_study_path() -> Path:
     """Path of the study file shipped with the package (paper Example 1)."""
+    from importlib import resources
+
     return Path(str(resources.files("xbsm") / "data" / DEFAULT_STUDY))
 
 
@@ -37,35 +38,102 @@ def _figure_dir(out: Path) -> Path:
 
 def run(study_file: Path | None, out: Path | None, *, overwrite=False, scheduler=None,
         workers=None, figures=True, progress=True) -> Path:
-    """Load, compute, write and draw one study; return the NetCDF path."""
+    """Load, compute, write and draw one study; return the NetCDF path.
+
+    A result that is written is a success: figures that cannot be drawn are a
+    warning line saying how to draw them (:func:`_draw_or_warn`).
+    """
+    from . import study
+    from .study.store import check_output
+
     spec = study.load(study_file or default_study_path())
     out = out or Path(spec.output or (Path(study_file or DEFAULT_STUDY).stem + ".nc"))
-    check_output(out, overwrite)  # before any work
+    check_output(out, overwrite, study_file)  # before any work
     result = study.run(spec)
     stop_if_interrupted()
     study.write(result, out, overwrite=overwrite, scheduler=scheduler or spec.scheduler,
                 workers=workers or spec.workers, progress=progress)
     print(f"wrote {out}")
     if figures:
-        draw(out, _figure_dir(out))
+        _draw_or_warn(out, _figure_dir(out))
     return out
 
 
-def draw(result_file: Path, directory: Path) -> list[Path]:
-    """The standard figures of a result file, written into ``directory``."""
-    with xr.open_dataset(result_file) as ds:
+def _open_result(result_file: Path):
+    """The result file, loaded; a StudyError if it is not a NetCDF file xbsm can read."""
+    import xarray as xr
+
+    from .study import StudyError
+
+    try:
+        with xr.open_dataset(result_file) as ds:
+            return ds.load()
+    except (OSError, ValueError, RuntimeError) as err:
+        raise StudyError(f"{result_file} is not a NetCDF result file that xbsm can read "
+                         f"({type(err).__name__}: {str(err).splitlines()[0] if str(err) else ''})"
+                         ) from None
+
+
+def _select(ds, selections: list[str]):
+    """``ds`` at ``DIM=VALUE`` selections: nearest for numbers, exact for names."""
+    from .study import StudyError
+
+    for text in selections or []:
+        dim, sep, value = text.partition("=")
+        if not sep or dim not in ds.dims:
+            raise StudyError(f"--sel {text!r}: give DIM=VALUE with DIM one of "
+                             f"{', '.join(map(str, ds.dims))}")
         try:
-            paths = plot.standard_figures(ds.load(), directory)
-        except ValueError as err:  # a result these figures cannot lay out
-            raise study.StudyError(f"no standard figures for {result_file}: {err}") from None
+            number = float(value)
+        except ValueError:
+            if value not in ds[dim].values.astype(str):
+                raise StudyError(f"--sel {text!r}: {dim} has no value {value!r}; it has "
+                                 f"{', '.join(ds[dim].values.astype(str)[:10])}") from None
+            ds = ds.sel({dim: value})
+        else:
+            ds = ds.sel({dim: number}, method="nearest")
+    return ds
+
+
+def draw(result_file: Path, directory: Path, selections=None) -> list[Path]:
+    """The standard figures of a result file (at ``DIM=VALUE`` selections) in ``directory``."""
+    from . import plot
+    from .study import StudyError
+
+    ds = _select(_open_result(result_file), selections)
+    try:
+        paths = plot.standard_figures(ds, directory)
+    except ValueError as err:  # a result these figures cannot lay out
+        raise StudyError(f"no standard figures for {result_file}: {err}") from None
     for path in paths:
         print(f"wrote {path}")
     return paths
 
 
+def _draw_or_warn(result_file: Path, directory: Path) -> list[Path]:
+    """:func:`draw`, but a figure that cannot be drawn is a warning line, not a failure."""
+    from .study import StudyError
+
+    try:
+        return draw(result_file, directory)
+    except Interrupted:
+        print(f"xbsm run: {result_file} is complete; the figures were interrupted: draw them "
+              f"with `xbsm plot {result_file}`", file=sys.stderr)
+        raise
+    except (StudyError, OSError, ValueError, RuntimeError) as err:
+        print(f"xbsm run: warning: {result_file} is complete, but its standard figures were "
+              f"not drawn ({err}); draw them with `xbsm plot {result_file} --sel DIM=VALUE`",
+              file=sys.stderr)
+        return []
+
+
 def info() -> None:
     """Print the atmosphere coverage, the method presets and the versions."""
+    from . import __version__
     from .atmosphere import database_path, open_atmosphere
+    from .methods import PRESETS
+    from .study.store import dependency_versions
+
     atm = open_atmosphere()
     print(f"xbsm {__version__} ({dependency_versions()})")
     print(f"atmosphere database: {database_path()}")
@@ -83,7 +151,8 @@ def _parser() -> argparse.ArgumentParser:
     run_ = sub.add_parser("run", help="run a study file (default: the paper's Example 1)")
     run_.add_argument("study", nargs="?", type=Path, help="study file (TOML); see docs/study.md")
     run_.add_argument("-o", "--out", type=Path, help="output NetCDF file")
-    run_.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    run_.add_argument("--overwrite", action="store_true",
+                      help="compute again and replace an existing output")
     run_.add_argument("--scheduler", help="threads, synchronous, local-cluster or an address "
                       "such as tcp://host:8786 (default: the study's, else threads)")
     run_.add_argument("--workers", type=int, help="threads or cluster workers")
@@ -91,48 +160,55 @@ def _parser() -> argparse.ArgumentParser:
     plot_ = sub.add_parser("plot", help="the standard figures of a result file")
     plot_.add_argument("result", type=Path, help="a NetCDF file written by xbsm run")
     plot_.add_argument("--out", type=Path, help="directory (default: next to the file)")
+    plot_.add_argument("--sel", action="append", metavar="DIM=VALUE",
+                       help="draw at one value of a dimension (nearest for numbers); repeatable, "
+                            "e.g. --sel altitude=3000 --sel visibility=23")
     sub.add_parser("info", help="atmosphere coverage, method presets, versions")
     olson = sub.add_parser("olson", help="alias of `xbsm run` into a directory")
     olson.add_argument("--out", type=Path, default=Path("olson"), help="output directory")
     return parser
 
 
-def _on_ctrl_c(signum, frame):
-    """Ctrl-C: remember it (for the checks between stages) and raise KeyboardInterrupt."""
-    INTERRUPTED.set()
-    raise KeyboardInterrupt
+def _command(parser, args) -> None:
+    if args.command == "run":
+        if args.workers is not None and args.workers < 1:
+            parser.error(f"--workers must be >= 1; got {args.workers}")
+        run(args.study, args.out, overwrite=args.overwrite, scheduler=args.scheduler,
+            workers=args.workers, figures=not args.no_figures)
+    elif args.command == "olson":
+        if args.out.exists() and not args.out.is_dir():
+            parser.error(f"--out {args.out} exists and is not a directory")
+        args.out.mkdir(parents=True, exist_ok=True)
+        run(None, args.out / "example1.nc", overwrite=True)
+    elif args.command == "plot":
+        if not args.result.is_file():
+            parser.error(f"no result file {args.result}")
+        draw(args.result, args.out or _figure_dir(args.result), args.sel)
+    else:
+        info()
 
 
 def main(argv=None) -> int:
     """Entry point of the ``xbsm`` command."""
     parser = _parser()
     args = parser.parse_args(argv)
-    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not if ignored
-        signal.signal(signal.SIGINT, _on_ctrl_c)
-    try:
-        if args.command == "run":
-            if args.workers is not None and args.workers < 1:
-                parser.error(f"--workers must be >= 1; got {args.workers}")
-            run(args.study, args.out, overwrite=args.overwrite, scheduler=args.scheduler,
-                workers=args.workers, figures=not args.no_figures)
-        elif args.command == "olson":
-            if args.out.exists() and not args.out.is_dir():
-                parser.error(f"--out {args.out} exists and is not a directory")
-            args.out.mkdir(parents=True, exist_ok=True)
-            run(None, args.out / "example1.nc", overwrite=True)
-        elif args.command == "plot":
-            if not args.result.is_file():
-                parser.error(f"no result file {args.result}")
-            draw(args.result, args.out or _figure_dir(args.result))
-        else:
-            info()
-    except study.StudyError as err:
-        parser.exit(2, f"xbsm {args.command}: {err}\n")
-    except OSError as err:
-        parser.exit(2, f"xbsm {args.command}: {err.strerror or err}: {err.filename or ''}\n")
-    except KeyboardInterrupt:
-        parser.exit(130, f"xbsm {args.command}: interrupted; finished chunks are kept, run the "
-                    "same command again to resume (no output file was written)\n")
+    with handling_signals():
+        try:
+            from .study import StudyError  # the heavy imports, under the handlers
+
+            try:
+                _command(parser, args)
+            except StudyError as err:
+                parser.exit(2, f"xbsm {args.command}: {err}\n")
+            except OSError as err:
+                parser.exit(2, f"xbsm {args.command}: {err.strerror or err}: "
+                            f"{err.filename or ''}\n")
+            except ValueError as err:  # a damaged or foreign database, an impossible value
+                parser.exit(2, f"xbsm {args.command}: {err}\n")
+        except KeyboardInterrupt as err:
+            code = getattr(err, "exit_code", 130)
+            parser.exit(code, f"xbsm {args.command}: interrupted; finished chunks are kept, run "
+                        "the same command again to resume\n")
     return 0
 
 

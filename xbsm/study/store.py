@@ -1,59 +1,59 @@
-"""Writing a lazy study result to NetCDF safely: chunk by chunk, resumable, atomic.
+"""Writing a lazy study result to NetCDF: one writer, resumable, never a wrong file.
 
-:func:`write` computes the result one chunk at a time (in parallel, on the
-local threads or a ``dask.distributed`` cluster) and saves each finished
-chunk at once, as a small file in ``OUT.nc.parts/`` (written under a
-temporary name and renamed, so a chunk file is either whole or absent). When
-every chunk is there it streams them into ``OUT.nc.partial`` and renames that
-to ``OUT.nc``: a file with the output's name is always complete. An
-interrupted run keeps its finished chunks; running it again computes only the
-missing ones (the parts directory records which study it belongs to and is
-discarded if the study changed).
+:func:`write` takes the output's lock (one run per output, :mod:`._lock`),
+fingerprints everything that determines the numbers (the result's layout, the
+study and method, the atmosphere database, xbsm's version and code, numpy and
+scipy), and keeps finished chunks in ``OUT.nc.parts/`` only while the
+fingerprint matches (:mod:`._parts`). It computes the missing chunks in batches
+(the graph of a batch is culled once, so set-up grows linearly with the study)
+on the local threads or a ``dask.distributed`` cluster, saving each as soon as it
+is done. Then it streams the chunk files into ``OUT.nc.partial`` one chunk at a
+time, with signals deferred to the gaps between writes
+(:mod:`xbsm.interrupts`), and renames it to ``OUT.nc``: a file with the output's
+name is always complete and holds only this run's numbers.
 """
 
 from __future__ import annotations
 
 import contextlib
 import functools
-import hashlib
 import itertools
-import json
 import os
 import shutil
-import sys
-import threading
 from pathlib import Path
 
-import dask
-import dask.array as dsa
-import dask.diagnostics
+import dask.local
+import dask.threaded
+import netCDF4
 import numpy as np
 import xarray as xr
+from dask.highlevelgraph import HighLevelGraph
 
-from ..atmosphere import database_path
+from ..interrupts import deferred, handling_signals, stop_if_interrupted
+from . import _parts
+from ._lock import OutputLock
+from ._parts import atmosphere_checksum, code_commit, stderr_line
+from ._progress import Progress
 from .spec import StudyError
+
+__all__ = ["atmosphere_checksum", "check_output", "dependency_versions", "netcdf_ready",
+           "write"]
+
+#: Chunks computed per batch and worker: each batch's graph is culled once.
+_BATCH_PER_WORKER = 16
 
 
 def netcdf_ready(ds: xr.Dataset) -> xr.Dataset:
     """A copy whose attributes NetCDF can hold (no None; booleans as integers)."""
     ds = ds.copy()
     for var in [*ds.variables.values(), ds]:
-        for key, value in list(var.attrs.items()):
-            if value is None:
-                del var.attrs[key]
-            elif isinstance(value, bool):
-                var.attrs[key] = int(value)
+        var.attrs = _netcdf_attrs(var.attrs)
     return ds
 
 
-@functools.lru_cache(maxsize=4)
-def atmosphere_checksum(path=None) -> str:
-    """SHA-256 of the atmosphere database file, for the provenance of a result."""
-    digest = hashlib.sha256()
-    with open(database_path(path), "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 22), b""):
-            digest.update(block)
-    return digest.hexdigest()
+def _netcdf_attrs(attrs: dict) -> dict:
+    return {key: int(value) if isinstance(value, bool) else value
+            for key, value in attrs.items() if value is not None}
 
 
 def dependency_versions() -> str:
@@ -64,118 +64,124 @@ def dependency_versions() -> str:
     return ", ".join(f"{name} {md.version(name)}" for name in names)
 
 
-def _block_indices(chunks: dict[str, tuple]):
-    """The index of every chunk of the grid (one entry per dimension)."""
-    return itertools.product(*(range(len(sizes)) for sizes in chunks.values()))
+def check_output(path, overwrite: bool = False, study_file=None) -> Path:
+    """``path`` as a Path if a result may be written there, else a StudyError saying why."""
+    path = Path(path)
+    if path.is_dir():
+        raise StudyError(f"{path} is a directory; give a file name such as {path / 'out.nc'}")
+    if study_file is not None and path.exists() and path.samefile(study_file):
+        raise StudyError(f"the output {path} is the study file itself; give another name "
+                         "with -o")
+    if path.exists() and not overwrite:
+        raise StudyError(f"{path} exists (a finished run); give --overwrite "
+                         "(overwrite=True) to compute it again, or another output with -o")
+    if not path.parent.is_dir():
+        raise StudyError(f"cannot write {path}: the directory {path.parent} does not exist")
+    return path
 
 
-def _fingerprint(result: xr.Dataset) -> str:
-    """What a parts directory must match to be reused: variables, shapes, chunks, attrs."""
-    layout = {name: [var.dims, var.shape, var.chunks] for name, var in result.data_vars.items()}
-    text = json.dumps([layout, {k: str(v) for k, v in result.attrs.items()}], default=str)
-    return hashlib.sha256(text.encode()).hexdigest()
+# --- the chunk grid ---------------------------------------------------------------------
 
 
-INTERRUPTED = threading.Event()
-"""Set by the ``xbsm`` command's Ctrl-C handler (see :func:`stop_if_interrupted`)."""
+class _Grid:
+    """The result's chunk grid: every dimension's block sizes, and which block is whose."""
+
+    def __init__(self, result: xr.Dataset):
+        self.chunks = dict(result.chunks)
+        self.dims = tuple(self.chunks)
+        self.offsets = {dim: np.concatenate([[0], np.cumsum(sizes)])
+                        for dim, sizes in self.chunks.items()}
+
+    def indices(self):
+        """Every chunk index, in order."""
+        return itertools.product(*(range(len(sizes)) for sizes in self.chunks.values()))
+
+    @property
+    def count(self) -> int:
+        """How many chunks."""
+        return int(np.prod([len(sizes) for sizes in self.chunks.values()]))
+
+    def block(self, index, var_dims) -> tuple:
+        """A variable's block index inside chunk ``index``."""
+        return tuple(index[self.dims.index(dim)] for dim in var_dims)
+
+    def owns(self, index, var_dims) -> bool:
+        """Whether chunk ``index`` saves the variable's block (index 0 along its other dims)."""
+        return all(i == 0 for dim, i in zip(self.dims, index, strict=True)
+                   if dim not in var_dims)
+
+    def region(self, index, var_dims) -> tuple:
+        """The variable's slices for the block of chunk ``index``."""
+        out = []
+        for dim in var_dims:
+            i = index[self.dims.index(dim)]
+            out.append(slice(int(self.offsets[dim][i]), int(self.offsets[dim][i + 1])))
+        return tuple(out)
 
 
-def stop_if_interrupted() -> None:
-    """Raise KeyboardInterrupt if Ctrl-C was pressed, even if the first one was lost.
-
-    Python delivers Ctrl-C as an exception in the main thread, which a library
-    may swallow (a bare ``except:``), and never in the threads computing chunks.
-    The command's handler also sets :data:`INTERRUPTED`; checking it between
-    stages and after every saved chunk makes Ctrl-C stop the run regardless.
-    """
-    if INTERRUPTED.is_set():
-        raise KeyboardInterrupt
+# --- computing the missing chunks -------------------------------------------------------
 
 
-def _save_block(arrays: dict, file: Path) -> None:
-    """Save one computed chunk (every variable's block) atomically, then stop if interrupted."""
-    partial = file.with_name(file.name + ".tmp")
-    with open(partial, "wb") as handle:
-        np.savez(handle, **arrays)
-    os.replace(partial, file)
+def _save_chunk(file: Path, names: tuple, print_: dict, on_saved, blocks: list) -> None:
+    """Save one computed chunk; stop the run here if a signal arrived meanwhile."""
+    _parts.save(file, dict(zip(names, blocks, strict=True)), print_)
+    if on_saved is not None:
+        on_saved()
     stop_if_interrupted()
 
 
-def _block_file(parts: Path, index) -> Path:
-    return parts / ("block-" + "-".join(map(str, index)) + ".npz")
+def _batch_graph(result, grid, graph, batch, parts, print_, on_saved):
+    """The tasks that compute and save the chunks of ``batch``: a graph culled once."""
+    owned = {index: [name for name, var in result.data_vars.items() if grid.owns(index, var.dims)]
+             for index in batch}
+    wanted = {index: [(result[name].data.name, *grid.block(index, result[name].dims))
+                      for name in names] for index, names in owned.items()}
+    dsk = dict(graph.cull({key for keys in wanted.values() for key in keys}))
+    saves = []
+    for index, names in owned.items():
+        key = ("xbsm-save-chunk", *index)
+        dsk[key] = (functools.partial(_save_chunk, _parts.block_file(parts, index), tuple(names),
+                                      print_, on_saved), wanted[index])
+        saves.append(key)
+    return dsk, saves
 
 
-def _prepare_parts(result: xr.Dataset, parts: Path) -> None:
-    """Create the parts directory, or reuse it only if it belongs to this study."""
-    manifest = parts / "study.json"
-    fingerprint = _fingerprint(result)
-    if parts.exists():
-        try:
-            same = json.loads(manifest.read_text())["fingerprint"] == fingerprint
-        except (OSError, ValueError, KeyError):
-            same = False
-        if same:
-            return
-        shutil.rmtree(parts)
-    parts.mkdir()
-    manifest.write_text(json.dumps({"fingerprint": fingerprint}))
+def _batches(items: list, size: int):
+    for start in range(0, len(items), size):
+        yield items[start:start + size]
 
 
-def _load_block(parts: Path, name: str, var_dims: tuple, grid: tuple, block_id=None):
-    """One variable's values in one chunk, read back from its chunk file."""
-    index = [0] * len(grid)
-    for dim, i in zip(var_dims, block_id, strict=True):
-        index[grid.index(dim)] = i
-    with np.load(_block_file(parts, index)) as saved:
-        return saved[name]
+def _compute_missing(result, grid, parts, print_, missing, scheduler, workers, progress):
+    """Compute and save the chunks in ``missing``, batch after batch."""
+    graph = HighLevelGraph.merge(*(var.data.__dask_graph__() for var in result.data_vars.values()))
+    with _runner(scheduler, workers) as run_graph:
+        local = scheduler in ("threads", "synchronous")
+        for batch in _batches(missing, max(1, workers) * _BATCH_PER_WORKER):
+            dsk, keys = _batch_graph(result, grid, graph, batch, parts, print_,
+                                     progress.add if local else None)
+            run_graph(dsk, keys)
+            if not local:
+                progress.add(len(batch))
+            stop_if_interrupted()
 
 
-def _assembled(result: xr.Dataset, parts: Path) -> xr.Dataset:
-    """The result with every variable read lazily from the chunk files."""
-    grid = tuple(result.chunks)
-    variables = {}
-    for name, var in result.data_vars.items():
-        data = dsa.map_blocks(_load_block, parts, name, var.dims, grid, dtype=var.dtype,
-                              chunks=var.chunks, meta=np.array((), dtype=var.dtype))
-        variables[name] = xr.Variable(var.dims, data, var.attrs, var.encoding)
-    coords = {name: coord.variable.compute() for name, coord in result.coords.items()}
-    return xr.Dataset(variables, coords=coords, attrs=result.attrs)
+@contextlib.contextmanager
+def _runner(scheduler: str, workers: int):
+    """A function that runs a graph to the given keys on the chosen scheduler."""
+    if scheduler == "threads":
+        yield functools.partial(dask.threaded.get, num_workers=workers)
+    elif scheduler == "synchronous":
+        yield dask.local.get_sync
+    else:
+        with _distributed_client(scheduler, workers) as client:
+            yield client.get
 
 
-def _compute_missing(result: xr.Dataset, parts: Path, scheduler: str, workers: int,
-                     progress: bool) -> None:
-    """Compute and save every chunk that has no file yet."""
-    chunks = dict(result.chunks)
-    grid = tuple(chunks)
-    # every variable's blocks as delayed objects, in one pass over the graph (selecting
-    # the result chunk by chunk instead rebuilds and culls the whole graph for each)
-    blocks = {name: var.data.to_delayed() for name, var in result.data_vars.items()}
-    tasks = []
-    for index in _block_indices(chunks):
-        if _block_file(parts, index).exists():
-            continue
-        arrays = {name: blocks[name][tuple(index[grid.index(dim)] for dim in var.dims)]
-                  for name, var in result.data_vars.items()}
-        tasks.append(dask.delayed(_save_block)(arrays, _block_file(parts, index)))
-    total = int(np.prod([len(sizes) for sizes in chunks.values()]))
-    if progress:
-        print(f"{total - len(tasks)} of {total} chunks already done; computing {len(tasks)} "
-              f"with {workers} worker(s) ({scheduler})", file=sys.stderr)
-    if not tasks:
-        return
-    if scheduler in ("threads", "synchronous"):
-        bar = dask.diagnostics.ProgressBar(out=sys.stderr) if progress else contextlib.nullcontext()
-        with bar:
-            dask.compute(*tasks, scheduler=scheduler, num_workers=workers)
-        return
-    _compute_distributed(tasks, scheduler, workers, progress)
-
-
-def _compute_distributed(tasks, scheduler: str, workers: int, progress: bool) -> None:
-    """Run the chunk tasks on a dask.distributed cluster (a LocalCluster or an address)."""
+@contextlib.contextmanager
+def _distributed_client(scheduler: str, workers: int):
+    """A dask.distributed client: of a new LocalCluster, or of the cluster at an address."""
     try:
         from dask.distributed import Client, LocalCluster
-        from dask.distributed import progress as show_progress
     except ImportError:
         raise StudyError("scheduler " + repr(scheduler) + " needs dask.distributed: "
                          "pip install \"xbsm[distributed]\"") from None
@@ -184,41 +190,94 @@ def _compute_distributed(tasks, scheduler: str, workers: int, progress: bool) ->
             # dashboard on a free port: a busy 8787 makes distributed retry and leak a socket
             cluster = stack.enter_context(LocalCluster(n_workers=workers, threads_per_worker=1,
                                                        dashboard_address=":0"))
-            client = stack.enter_context(Client(cluster))
+            yield stack.enter_context(Client(cluster))
         else:
-            client = stack.enter_context(Client(scheduler))
-        futures = client.compute(tasks)
-        if progress:
-            show_progress(futures)
-        client.gather(futures)
+            yield stack.enter_context(Client(scheduler))
 
 
-def _finalize(result: xr.Dataset, parts: Path, path: Path) -> None:
+# --- streaming the chunks into one NetCDF file ------------------------------------------
+
+
+def _skeleton(result: xr.Dataset, attrs: dict) -> xr.Dataset:
+    """The file without its data variables: coordinates (no fill values) and attributes."""
+    coords = {name: coord.variable.compute() for name, coord in result.coords.items()}
+    return netcdf_ready(xr.Dataset(coords=coords, attrs={**result.attrs, **attrs}))
+
+
+def _define(nc, result: xr.Dataset) -> None:
+    """Create every data variable in the open file, with its attributes and encoding."""
+    for dim in {dim for var in result.data_vars.values() for dim in var.dims}:
+        if dim not in nc.dimensions:
+            nc.createDimension(dim, result.sizes[dim])
+    for name, var in result.data_vars.items():
+        dtype = np.dtype("i1") if var.dtype == bool else var.dtype
+        fill = np.nan if dtype.kind == "f" else False
+        encoding = {key: var.encoding[key] for key in ("zlib", "complevel", "shuffle")
+                    if key in var.encoding}
+        variable = nc.createVariable(name, dtype, var.dims, fill_value=fill, **encoding)
+        variable.set_auto_maskandscale(False)
+        attrs = _netcdf_attrs(var.attrs)
+        if var.dtype == bool:
+            attrs["dtype"] = "bool"  # how xarray stores booleans, so they read back as such
+        others = [c for c, coord in result.coords.items()
+                  if c not in result.dims and set(coord.dims) <= set(var.dims)]
+        if others:
+            attrs["coordinates"] = " ".join(others)
+        variable.setncatts(attrs)
+
+
+def _stream(result, grid, parts, print_, partial: Path, progress) -> None:
+    """Write every chunk file's blocks into ``partial`` (created by the skeleton)."""
+    with netCDF4.Dataset(partial, "a") as nc:
+        _define(nc, result)
+        for index in grid.indices():
+            stop_if_interrupted()
+            file = _parts.block_file(parts, index)
+            arrays = _parts.load(file, print_)
+            if arrays is None:
+                file.unlink(missing_ok=True)
+                raise StudyError(f"chunk file {file} was damaged after it was saved; it has "
+                                 "been removed: run the same command again to compute it")
+            for name, block in arrays.items():
+                nc[name][grid.region(index, result[name].dims)] = block
+            progress.add()
+
+
+def _assemble(result, grid, parts, print_, path: Path, progress: bool) -> None:
     """Stream the chunk files into ``path`` through a temporary file, then rename."""
     partial = path.with_name(path.name + ".partial")
-    final = _assembled(result, parts).assign_attrs(
-        xbsm_atmosphere_sha256=atmosphere_checksum(), xbsm_dependencies=dependency_versions(),
-        date_created=np.datetime_as_string(np.datetime64("now", "s")) + "Z")
+    attrs = {"xbsm_atmosphere_sha256": atmosphere_checksum(),
+             "xbsm_code_sha256": _parts.code_checksum(), "xbsm_commit": code_commit() or None,
+             "xbsm_dependencies": dependency_versions(),
+             "date_created": np.datetime_as_string(np.datetime64("now", "s")) + "Z"}
     try:
-        with dask.config.set(scheduler="synchronous"):  # one thread: nothing waits on a lock
-            netcdf_ready(final).to_netcdf(partial)
+        with deferred():  # a signal stops the writing between two chunks, never inside one
+            skeleton = _skeleton(result, attrs)
+            skeleton.to_netcdf(partial, engine="netcdf4",
+                               encoding={name: {"_FillValue": None} for name in skeleton.variables})
+            _stream(result, grid, parts, print_, partial, Progress(
+                "writing the NetCDF file", grid.count, enabled=progress))
+            with open(partial, "rb+") as handle:
+                os.fsync(handle.fileno())
         os.replace(partial, path)
+    except (OSError, RuntimeError) as err:
+        partial.unlink(missing_ok=True)
+        raise StudyError(_write_error(partial, err)) from None
     except BaseException:
         partial.unlink(missing_ok=True)
         raise
-    shutil.rmtree(parts, ignore_errors=True)
 
 
-def check_output(path, overwrite: bool = False) -> Path:
-    """``path`` as a Path if a result may be written there, else a StudyError saying why."""
-    path = Path(path)
-    if path.is_dir():
-        raise StudyError(f"{path} is a directory; give a file name such as {path / 'out.nc'}")
-    if path.exists() and not overwrite:
-        raise StudyError(f"{path} exists; pass overwrite=True (--overwrite) to replace it")
-    if not path.parent.is_dir():
-        raise StudyError(f"cannot write {path}: the directory {path.parent} does not exist")
-    return path
+def _write_error(file: Path, err: Exception) -> str:
+    """One line for a failed write: the file, the error and the disk's free space."""
+    free = shutil.disk_usage(file.parent).free
+    text = getattr(err, "strerror", None) or str(err)
+    full = " (the disk is full)" if free < 64 << 20 or "No space" in text else ""
+    return (f"cannot write {file}: {text}{full}; {free / 1e6:.0f} MB free on its disk; "
+            "finished chunks are kept, run the same command again once there is room")
+
+
+# --- the public writer ------------------------------------------------------------------
 
 
 def write(result: xr.Dataset, path, *, overwrite: bool = False, scheduler: str = "threads",
@@ -239,7 +298,8 @@ def write(result: xr.Dataset, path, *, overwrite: bool = False, scheduler: str =
     workers : int
         Threads, or LocalCluster workers.
     progress : bool
-        Print progress to standard error.
+        Print progress to standard error (a bar in a terminal, a line per 10 %
+        otherwise).
 
     Returns
     -------
@@ -249,17 +309,31 @@ def write(result: xr.Dataset, path, *, overwrite: bool = False, scheduler: str =
     Raises
     ------
     StudyError
-        ``path`` exists (without ``overwrite``) or its directory is not writable.
+        ``path`` exists (without ``overwrite``), another run is writing it, its
+        directory is not writable, or the disk is full.
+    KeyboardInterrupt
+        (:class:`xbsm.interrupts.Interrupted`) on SIGINT or SIGTERM: finished
+        chunks are kept, and the same call resumes.
     """
     path = check_output(path, overwrite)
     if not result.chunks:  # an eager Dataset: one chunk
         result = result.chunk()
     parts = path.with_name(path.name + ".parts")
-    try:
-        _prepare_parts(result, parts)
-    except OSError as err:
-        raise StudyError(f"cannot write to {path.parent}: {err.strerror or err}") from None
-    _compute_missing(result, parts, scheduler, workers, progress)
-    stop_if_interrupted()
-    _finalize(result, parts, path)
+    say = stderr_line
+    with handling_signals(), OutputLock(path, result.attrs.get("title", "")):
+        check_output(path, overwrite)  # again: another run may have finished it meanwhile
+        grid, print_ = _Grid(result), _parts.fingerprint(result)
+        try:
+            _parts.prepare(parts, print_, say)
+        except OSError as err:
+            raise StudyError(f"cannot write to {path.parent}: {err.strerror or err}") from None
+        done = _parts.verified(parts, grid.indices(), print_, say)
+        missing = [index for index in grid.indices() if index not in done]
+        if progress:
+            say(f"{len(done)} of {grid.count} chunks already done; computing {len(missing)} "
+                f"with {workers} worker(s) ({scheduler})")
+        _compute_missing(result, grid, parts, print_, missing, scheduler, workers,
+                         Progress("chunks computed", len(missing), enabled=progress))
+        _assemble(result, grid, parts, print_, path, progress)
+        shutil.rmtree(parts, ignore_errors=True)
     return path

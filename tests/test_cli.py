@@ -1,0 +1,172 @@
+"""The ``xbsm`` command: exit codes, one-line errors, signals, figures after a result."""
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from xbsm import cli, interrupts
+from xbsm.atmosphere import _load_database, database_path
+
+# 40 altitudes: more panels than the standard figures lay out (issue 21, item 1)
+FORTY_ALTITUDES = """
+title = "forty altitudes"
+[sensor]
+preset = "olson"
+band = "nir"
+[scenario]
+platform_speed = 100.0
+[sweep]
+ground_range = [0.0, 20000.0]
+altitude = { start = 1000.0, stop = 20000.0, num = 40 }
+visibility = [23.0, 5.0]
+"""
+
+# 48 chunks of a few scenarios: long enough to be signalled while computing
+FORTY_EIGHT_CHUNKS = """
+title = "forty-eight chunks"
+[sensor]
+preset = "olson"
+band = "nir"
+[scenario]
+altitude = 9000.0
+platform_speed = 100.0
+[sweep]
+ground_range = { start = 0.0, stop = 90e3, num = 48 }
+visibility = [23.0, 5.0]
+[run]
+chunks = { ground_range = 1 }
+"""
+
+
+def _study(tmp_path, text, name="study.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_a_written_result_exits_0_even_when_its_figures_cannot_be_drawn(tmp_path, capsys):
+    study = _study(tmp_path, FORTY_ALTITUDES)
+    out = tmp_path / "out.nc"
+    assert cli.main(["run", str(study), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    warning = [line for line in err.splitlines() if "warning" in line]
+    assert len(warning) == 1 and "xbsm plot" in warning[0] and "--sel" in warning[0]
+    with xr.open_dataset(out) as ds:
+        assert ds.niirs.sizes["altitude"] == 40
+    # the hint, followed: one altitude (nearest) draws the figures
+    figures = tmp_path / "figures"
+    assert cli.main(["plot", str(out), "--sel", "altitude=3000", "--out", str(figures)]) == 0
+    assert sorted(p.name for p in figures.glob("*.png"))
+
+
+def test_plot_sel_names_the_dimensions_on_a_wrong_one(tmp_path, capsys):
+    study = _study(tmp_path, FORTY_ALTITUDES)
+    out = tmp_path / "out.nc"
+    cli.main(["run", str(study), "-o", str(out), "--no-figures"])
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as code:
+        cli.main(["plot", str(out), "--sel", "altitud=3000"])
+    assert code.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "altitude" in err[0] and "DIM=VALUE" in err[0]
+
+
+def test_the_study_file_is_never_the_output(tmp_path, capsys):
+    study = _study(tmp_path, FORTY_ALTITUDES)
+    with pytest.raises(SystemExit) as code:
+        cli.main(["run", str(study), "-o", str(study), "--overwrite"])
+    assert code.value.code == 2
+    assert "study file itself" in capsys.readouterr().err
+    assert study.read_text() == FORTY_ALTITUDES
+
+
+@pytest.mark.parametrize("content", [b"", b"not a NetCDF file\n",
+                                     b"\x89HDF\r\n\x1a\n" + b"\0" * 64])
+def test_plot_of_a_file_that_is_not_a_result_is_one_line(tmp_path, capsys, content):
+    path = tmp_path / "result.nc"
+    path.write_bytes(content)
+    with pytest.raises(SystemExit) as code:
+        cli.main(["plot", str(path)])
+    assert code.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not a NetCDF result file" in err[0] and str(path) in err[0]
+
+
+def test_a_damaged_database_is_named_in_one_clear_error(tmp_path):
+    # zlib-compressed chunks (the shipped file's encoding): flipped bytes fail HDF5's inflate
+    copy = tmp_path / "atmosphere.nc"
+    shutil.copy(database_path(), copy)
+    data = bytearray(copy.read_bytes())
+    for offset in range(len(data) // 3, len(data) // 3 + 4096):
+        data[offset] ^= 0xFF
+    copy.write_bytes(bytes(data))
+    with pytest.raises(ValueError, match=r"atmosphere database .*atmosphere\.nc is damaged "
+                                         r"\(NetCDF/HDF error"):
+        _load_database(str(copy))
+
+
+def test_a_value_error_is_one_line_with_exit_2(tmp_path, capsys, monkeypatch):
+    import xbsm.study
+
+    def damaged(path):
+        raise ValueError("atmosphere database X is damaged (NetCDF/HDF error): reinstall")
+
+    monkeypatch.setattr(xbsm.study, "load", damaged)
+    with pytest.raises(SystemExit) as code:
+        cli.main(["run", str(tmp_path / "s.toml"), "-o", str(tmp_path / "o.nc")])
+    assert code.value.code == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "xbsm run: atmosphere database X is damaged (NetCDF/HDF error): reinstall"]
+
+
+@pytest.mark.parametrize(("signum", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_inside_a_write_waits_for_the_end_of_it(signum, code):
+    # the handler only records the signal inside a deferred section (no exception while a
+    # library holds a lock); the section's end raises it, with the shell's exit code
+    reached = []
+    with interrupts.handling_signals():
+        with pytest.raises(interrupts.Interrupted) as err:
+            with interrupts.deferred():
+                os.kill(os.getpid(), signum)
+                reached.append("after the signal")
+        assert reached == ["after the signal"] and err.value.exit_code == code
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def _as_in_a_terminal():
+    # a background child of a non-interactive shell inherits SIGINT ignored (POSIX)
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+@pytest.mark.parametrize(("signum", "code"), [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
+def test_a_signalled_run_exits_with_its_code_and_resumes(tmp_path, signum, code):
+    study = _study(tmp_path, FORTY_EIGHT_CHUNKS)
+    out = tmp_path / "out.nc"
+    command = [sys.executable, "-m", "xbsm.cli", "run", str(study), "-o", str(out),
+               "--no-figures", "--workers", "1"]
+    proc = subprocess.Popen(command, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                            text=True, preexec_fn=_as_in_a_terminal)
+    for line in proc.stderr:  # off a terminal, progress is a line per 10 %
+        if "chunks computed" in line:
+            break
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == code and "interrupted" in err.strip().splitlines()[-1]
+    assert not out.exists() and not (tmp_path / "out.nc.lock").exists()
+    saved = len(list((tmp_path / "out.nc.parts").glob("block-*.npz")))
+    assert saved >= 1
+    resumed = subprocess.run(command, capture_output=True, text=True, timeout=300, check=True)
+    assert f"{saved} of 48 chunks already done" in resumed.stderr
+    reference = tmp_path / "reference.nc"
+    subprocess.run([*command[:5], "-o", str(reference), "--no-figures"], check=True,
+                   capture_output=True, timeout=300)
+    with xr.open_dataset(out) as a, xr.open_dataset(reference) as b:
+        for name in b.data_vars:
+            np.testing.assert_array_equal(a[name].values, b[name].values)
