@@ -271,6 +271,9 @@ def _load_database(path: str) -> _Database:
         raise ValueError(f"path {path!r} is not an xbsm atmosphere database: it cannot be "
                          "read as a NetCDF file (the database is the NetCDF file "
                          "recipes/build_atmosphere.py writes)") from err
+    except RuntimeError as err:  # HDF5's own checks failed: a truncated or bit-flipped file
+        raise ValueError(f"atmosphere database {path} is damaged (NetCDF/HDF error: {err}): "
+                         "reinstall xbsm or rebuild it with recipes/build_atmosphere.py") from None
     except (KeyError, IndexError) as err:
         raise ValueError(f"path {path!r} is not an xbsm atmosphere database: it lacks the "
                          "variable 'atmosphere' or its coordinates (visibility, altitude, "
