@@ -130,14 +130,22 @@ def test_a_value_error_is_one_line_with_exit_2(tmp_path, capsys, monkeypatch):
 def test_a_signal_inside_a_write_waits_for_the_end_of_it(signum, code):
     # the handler only records the signal inside a deferred section (no exception while a
     # library holds a lock); the section's end raises it, with the shell's exit code
+    # (Python's own defaults first: a test run started in the background inherits SIGINT
+    # ignored, and the handlers leave an ignored signal alone)
+    default = signal.default_int_handler if signum == signal.SIGINT else signal.SIG_DFL
+    before = signal.signal(signum, default)
     reached = []
-    with interrupts.handling_signals():
-        with pytest.raises(interrupts.Interrupted) as err:
-            with interrupts.deferred():
-                os.kill(os.getpid(), signum)
-                reached.append("after the signal")
-        assert reached == ["after the signal"] and err.value.exit_code == code
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    try:
+        with interrupts.handling_signals():
+            with pytest.raises(interrupts.Interrupted) as err:
+                with interrupts.deferred():
+                    os.kill(os.getpid(), signum)
+                    reached.append("after the signal")
+            assert reached == ["after the signal"] and err.value.exit_code == code
+        assert signal.getsignal(signum) is default  # the handler is put back
+    finally:
+        signal.signal(signum, before)
+        interrupts.INTERRUPTED.clear()
 
 
 def _as_in_a_terminal():

@@ -1,10 +1,11 @@
 """A study as one lazy Dataset: a dask task per chunk of the scenario grid.
 
 The scenario grid is the product of the study's dimensions (``band``, then
-every sweep in file order). :func:`run` cuts it into chunks and wraps one
-eager model call per chunk in :func:`xarray.map_blocks`, so building the
-result costs one small model call (which fixes the output's variables and
-dimensions) and computes nothing else. Inside a chunk the model still
+every sweep in file order). :func:`run` cuts it into chunks, one eager model
+call per chunk, in symbolic dask ``blockwise`` layers: building the result costs
+one small model call (which fixes the output's variables and dimensions) and
+the same for any number of chunks; nothing else is computed, and a chunk's
+tasks exist only once it is asked for. Inside a chunk the model still
 computes each quantity on the dimensions it depends on (the atmosphere on
 altitude x ground range x visibility only), which is what makes product
 sweeps cheap. The same Dataset computes on the local threads or on any
@@ -14,7 +15,9 @@ sweeps cheap. The same Dataset computes on the local threads or on any
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+import string
 
 import dask.array as dsa
 import numpy as np
@@ -50,7 +53,7 @@ def _coords(study: Study) -> dict:
     """Coordinates of the study dimensions: the swept values (paired ones as extra coords)."""
     coords = {}
     if study.bands:
-        coords["band"] = list(study.bands)
+        coords["band"] = ("band", list(study.bands), {})
         for name in ("wavelength_min", "wavelength_max"):
             values = [band.get(name, study.sensor.get(name)) for band in study.bands.values()]
             coords[name] = ("band", np.asarray(values, dtype=float),
@@ -98,44 +101,69 @@ def _one_band(study: Study, coords: dict, band: str | None) -> xr.Dataset:
     return out
 
 
-def _outputs(block: xr.Dataset, study: Study) -> xr.Dataset:
+def _outputs(coords: dict, study: Study) -> xr.Dataset:
     """Every requested output over one chunk of the scenario grid (eager)."""
-    coords = {name: block[name].values for name in block.coords}
     bands = list(coords["band"]) if study.bands else [None]
     parts = [_one_band(study, coords, band) for band in bands]
     return xr.concat(parts, dim="band", coords="minimal") if study.bands else parts[0]
 
 
-def _block(block: xr.Dataset, study: Study, layout: dict, extra: dict) -> xr.Dataset:
-    """One chunk of the result: every variable on the dims ``layout`` gives it."""
-    out = _outputs(block, study)
-    variables = {name: out[name].transpose(*dims).variable for name, dims in layout.items()}
-    return xr.Dataset(variables, coords={**block.coords, **extra})
+def _chunk_coords(coords: dict, positions: dict) -> dict:
+    """The coordinates of one chunk: every coordinate at its dimension's positions."""
+    return {name: np.asarray(values)[positions[dim]]
+            for name, (dim, values, _) in coords.items()}
 
 
-def _inputs(study: Study, chunks: dict) -> xr.Dataset:
-    """The chunked scenario grid that map_blocks splits (one placeholder variable)."""
-    sizes = study.sizes
-    grid = dsa.zeros(tuple(sizes.values()), dtype=np.int8,
-                     chunks=tuple(chunks[dim] for dim in sizes))
-    return xr.Dataset({"_grid": (tuple(sizes), grid)}, coords=_coords(study))
+def _chunk(study: Study, coords: dict, layout: dict, *positions) -> np.ndarray:
+    """One chunk's outputs, every variable on the dims ``layout`` gives it, in a 1x..x1 cell.
+
+    ``positions`` are the chunk's index positions along each study dimension, in order.
+    """
+    out = _outputs(_chunk_coords(coords, dict(zip(study.sizes, positions, strict=True))),
+                   study)
+    cell = np.empty((1,) * len(positions), dtype=object)
+    cell[(0,) * len(positions)] = {name: out[name].transpose(*dims).values
+                                   for name, dims in layout.items()}
+    return cell
 
 
-def _template(study: Study, inputs: xr.Dataset, chunks: dict) -> xr.Dataset:
-    """The output's variables, dims and attrs, from one model call on the first scenario."""
-    first = inputs.drop_vars("_grid").isel({dim: slice(0, 1) for dim in inputs.dims})
-    sample = _outputs(first, study)
-    variables = {}
-    for name, var in sample.data_vars.items():
-        dims = tuple(dim for dim in inputs.dims if dim in var.dims) + tuple(
-            dim for dim in var.dims if dim not in inputs.dims)
-        shape = tuple(inputs.sizes.get(dim, var.sizes[dim]) for dim in dims)
-        blocks = tuple(chunks.get(dim, var.sizes[dim]) for dim in dims)
-        variables[name] = xr.Variable(dims, dsa.empty(shape, dtype=var.dtype, chunks=blocks),
-                                      var.attrs)
-    extra = {name: sample[name].variable for name in sample.coords
-             if name not in inputs.coords and name in sample.dims}
-    return xr.Dataset(variables, coords={**inputs.coords, **extra})
+def _pick(cell: np.ndarray, name: str) -> np.ndarray:
+    """One variable's block out of a chunk's cell."""
+    return cell.reshape(-1)[0][name]
+
+
+def _template(study: Study, coords: dict) -> xr.Dataset:
+    """One model call on the first scenario: the output's variables, dims, dtypes and attrs."""
+    sample = _outputs(_chunk_coords(coords, dict.fromkeys(study.sizes, slice(0, 1))), study)
+    layout = {name: tuple(dim for dim in study.sizes if dim in var.dims)
+              + tuple(dim for dim in var.dims if dim not in study.sizes)
+              for name, var in sample.data_vars.items()}
+    return sample, layout
+
+
+def _variable(cells, name: str, dims: tuple, sample: xr.DataArray, study: Study,
+              chunks: dict):
+    """One output variable as a dask array picked out of the chunks' cells, lazily."""
+    grid = tuple(study.sizes)
+    letters = dict(zip(grid, string.ascii_lowercase, strict=False))
+    own = [dim for dim in dims if dim not in letters]
+    own_letters = string.ascii_uppercase[:len(own)]
+    if any(dim not in dims for dim in grid):  # blocks owned by the chunks at index 0 there
+        cells = cells.blocks[tuple(slice(None) if dim in dims else slice(0, 1) for dim in grid)]
+    kept = "".join(letters[dim] for dim in grid if dim in dims)
+    return dsa.blockwise(
+        _pick, kept + own_letters, cells, "".join(letters.values()), name, None,
+        new_axes={letter: sample.sizes[dim] for letter, dim in zip(own_letters, own,
+                                                                   strict=True)},
+        adjust_chunks={letters[dim]: _chunks_of(study.sizes[dim], chunks[dim])
+                       for dim in grid if dim in dims},
+        dtype=sample.dtype, meta=np.empty((0,) * len(dims), dtype=sample.dtype),
+        concatenate=True, align_arrays=False)
+
+
+def _chunks_of(size: int, length: int) -> tuple:
+    """Block lengths of a dimension of ``size`` cut every ``length``."""
+    return tuple(min(length, size - start) for start in range(0, size, length))
 
 
 def run(study: Study) -> xr.Dataset:
@@ -152,14 +180,30 @@ def run(study: Study) -> xr.Dataset:
         Every requested output over ``band`` (if the study has bands) and the
         swept dimensions, dask-backed with the study's chunks; global
         attributes record the study text, the method and the xbsm version.
+
+    Notes
+    -----
+    The graph is symbolic (dask ``blockwise`` layers): building it costs the same
+    for 10 chunks or 10^6, and a chunk's tasks are made only when it is computed.
+    Each chunk is one eager model call; a variable that does not depend on a
+    study dimension takes its blocks from the chunks at index 0 along it.
     """
     chunks = chunk_sizes(study)
-    inputs = _inputs(study, chunks)
-    template = _template(study, inputs, chunks)
-    layout = {name: var.dims for name, var in template.data_vars.items()}
-    extra = {name: (coord.dims, coord.values, coord.attrs)
-             for name, coord in template.coords.items() if name not in inputs.coords}
-    result = xr.map_blocks(_block, inputs, args=(study, layout, extra), template=template)
+    coords = _coords(study)
+    sample, layout = _template(study, coords)
+    positions = [dsa.arange(size, chunks=chunks[dim]) for dim, size in study.sizes.items()]
+    letters = string.ascii_lowercase[:len(positions)]
+    cells = dsa.blockwise(
+        functools.partial(_chunk, study, coords, layout), letters,
+        *[arg for pos, letter in zip(positions, letters, strict=True) for arg in (pos, letter)],
+        adjust_chunks={letter: 1 for letter in letters}, dtype=object,
+        meta=np.empty((0,) * len(letters), dtype=object), align_arrays=False)
+    variables = {name: xr.Variable(dims, _variable(cells, name, dims, sample[name], study,
+                                                   chunks), sample[name].attrs)
+                 for name, dims in layout.items()}
+    extra = {name: sample[name].variable for name in sample.coords
+             if name not in study.sizes and name in sample.dims}
+    result = xr.Dataset(variables, coords={**coords, **extra})
     return result.assign_attrs(_provenance(study))
 
 
