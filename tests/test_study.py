@@ -200,6 +200,60 @@ def test_min_parameter_over_other_dimensions_at_once():
     np.testing.assert_allclose(out.min_aperture_diameter.values, [0.2, 0.35], rtol=1e-12)
 
 
+def test_max_range_says_when_it_lands_outside_the_calibration():
+    # NIIRS 8, 7, 5, 3 at 0-30 km: 6 is crossed between 10 and 20 km; the 20 km cell has
+    # elevation_out_of_range (a calibration bit, xbsm.flags.CALIBRATION), so the answer is
+    # interpolated from an extrapolated cell and says so, with the cells' own flags
+    niirs = _line([8, 7, 5, 3], [0.0, 10e3, 20e3, 30e3])
+    flags = xr.zeros_like(niirs, dtype=np.int32).assign_attrs(xbsm.flags.flag_attrs())
+    flags[2:] = xbsm.flags.flag("elevation_out_of_range")
+    out = study.max_range(niirs, 6.0, flags=flags)
+    assert float(out.max_range) == pytest.approx(15e3, rel=1e-12)
+    assert int(out.goal_flags) == study.goals.GOAL_FLAGS["outside_calibration"]
+    assert bool(xbsm.flags.decode(out.goal_flags).outside_calibration)
+    assert bool(xbsm.flags.decode(out.flags).elevation_out_of_range)
+    assert bool(xbsm.flags.is_outside_calibration(out.flags))
+    # a requirement met exactly on the calibrated 10 km cell (7) uses that cell only
+    exact = study.max_range(niirs, 7.0, flags=flags)
+    assert float(exact.max_range) == 10e3 and int(exact.goal_flags) == 0
+    assert int(exact.flags) == 0
+
+
+def test_min_parameter_says_when_it_lands_outside_the_calibration():
+    # NIIRS 4, 6, 8 over apertures 0.1, 0.2, 0.3 m: 5 is met between 0.1 and 0.2 m; the
+    # 0.1 m cell has rer_out_of_range and q_out_of_range (xbsm.flags.CALIBRATION)
+    d = np.array([0.1, 0.2, 0.3])
+    niirs = _line([4.0, 6.0, 8.0], d, dim="aperture_diameter")
+    flags = xr.zeros_like(niirs, dtype=np.int32).assign_attrs(xbsm.flags.flag_attrs())
+    flags[0] = xbsm.flags.flag("rer_out_of_range") | xbsm.flags.flag("q_out_of_range")
+    out = study.min_parameter(niirs, 5.0, "aperture_diameter", flags=flags)
+    assert float(out.min_aperture_diameter) == pytest.approx(0.15, rel=1e-12)
+    assert int(out.goal_flags) == study.goals.GOAL_FLAGS["outside_calibration"]
+    bits = xbsm.flags.decode(out.flags)
+    assert bool(bits.rer_out_of_range) and bool(bits.q_out_of_range)
+    # 6 is met first, exactly, at 0.2 m (calibrated): nothing to say
+    assert int(study.min_parameter(niirs, 6.0, "aperture_diameter", flags=flags).goal_flags) == 0
+
+
+def test_max_range_on_a_model_result_flags_a_low_elevation_answer():
+    # the Olson camera at 1 km altitude (xbsm.examples): far ground ranges look at a few
+    # degrees of elevation, outside every GIQE's calibration (xbsm.metrics.GIQE_CALIBRATIONS)
+    ranges = xr.DataArray(np.linspace(0.0, 30e3, 16), dims="ground_range")
+    n = xbsm.niirs(olson_sensor(), olson_scenario(ground_range=ranges, altitude=1000.0,
+                                                  visibility=23.0))
+    niirs5, flags5 = n.niirs.sel(giqe=5), n.flags.sel(giqe=5)
+    assert niirs5.dims == ("ground_range",)
+    low = float(niirs5.min()) + 0.01
+    out = study.max_range(niirs5, low, flags=flags5)
+    assert bool(xbsm.flags.decode(out.flags).elevation_out_of_range)
+    assert int(out.goal_flags) & study.goals.GOAL_FLAGS["outside_calibration"]
+
+
+def test_probability_meets_is_named_for_what_it_is():
+    p = study.probability_meets(xr.DataArray([5.0], name="niirs"), 5.0)
+    assert p.name == "probability_meets"
+
+
 def test_goals_on_a_study_result_stay_lazy(tiny):
     result = study.run(tiny)
     with dask.config.set(scheduler=_raise_on_compute):
