@@ -276,6 +276,14 @@ BAD = [
         "threads, synchronous, local-cluster"),
     row("zero_workers", run_table("workers = 0"), "run.workers", 15, "whole number >= 1"),
     row("empty_output_path", run_table('output = ""'), "run.output", 15, "file name"),
+    row("compress_above_9", run_table("compress = 10"), "run.compress", 15, "0 (no compression)"),
+    row("compress_as_text", run_table('compress = "zlib"'), "run.compress", 15, "to 9"),
+    row("unknown_output_variable", outputs('variables = ["nirs"]'), "outputs.variables", 15,
+        "did you mean 'niirs'"),
+    row("output_variables_not_a_list", outputs('variables = "niirs"'), "outputs.variables", 15,
+        "non-empty list"),
+    row("mtf_variable_without_mtf", outputs('variables = ["mtf_system"]'), "outputs.variables",
+        15, 'add "mtf" to include'),
 ]
 
 

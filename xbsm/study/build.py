@@ -22,6 +22,7 @@ import xarray as xr
 
 from .. import __version__, model, params
 from ..methods import method as make_method
+from . import _cf
 from .spec import SCENARIO_PARAMETERS, SENSOR_PARAMETERS, Study
 
 
@@ -50,7 +51,7 @@ def _coords(study: Study) -> dict:
     """Coordinates of the study dimensions: the swept values (paired ones as extra coords)."""
     coords = {}
     if study.bands:
-        coords["band"] = list(study.bands)
+        coords["band"] = ("band", list(study.bands), {"long_name": "spectral band"})
         for name in ("wavelength_min", "wavelength_max"):
             values = [band.get(name, study.sensor.get(name)) for band in study.bands.values()]
             coords[name] = ("band", np.asarray(values, dtype=float),
@@ -149,18 +150,33 @@ def run(study: Study) -> xr.Dataset:
     Returns
     -------
     xr.Dataset
-        Every requested output over ``band`` (if the study has bands) and the
-        swept dimensions, dask-backed with the study's chunks; global
-        attributes record the study text, the method and the xbsm version.
+        Every requested output (only those ``[outputs] variables`` names, and
+        their flag variables, if it is given) over ``band`` (if the study has
+        bands) and the swept dimensions, dask-backed with the study's chunks;
+        global attributes record the study text, the method and the xbsm
+        version. CF details: each data variable names its flag variable in
+        ``ancillary_variables``, the flag variables say in ``comment`` which
+        bits apply to which variables; each variable's ``.encoding`` says how
+        to write it (no ``_FillValue`` on coordinates; zlib at ``[run]
+        compress`` on the data variables), which :func:`xbsm.study.write`
+        honours (``xbsm.study._cf.cf_encoding`` gives the same as a
+        ``to_netcdf(encoding=...)`` mapping).
     """
     chunks = chunk_sizes(study)
     inputs = _inputs(study, chunks)
     template = _template(study, inputs, chunks)
+    if study.variables:  # [outputs] variables: only these are kept, computed chunk by chunk
+        template = template[[name for name in study.variables if name in template.data_vars]]
+        template = template.drop_vars([name for name in template.coords
+                                       if name not in inputs.coords
+                                       and not any(name in var.dims
+                                                   for var in template.data_vars.values())])
     layout = {name: var.dims for name, var in template.data_vars.items()}
     extra = {name: (coord.dims, coord.values, coord.attrs)
              for name, coord in template.coords.items() if name not in inputs.coords}
     result = xr.map_blocks(_block, inputs, args=(study, layout, extra), template=template)
-    return result.assign_attrs(_provenance(study))
+    result = _cf.cf_attributes(result.assign_attrs(_provenance(study)))
+    return _cf.set_encoding(result, study.compress)
 
 
 def _provenance(study: Study) -> dict:
@@ -169,6 +185,7 @@ def _provenance(study: Study) -> dict:
         "title": study.title or "xbsm study",
         "Conventions": "CF-1.8",
         "source": f"xbsm {__version__}",
+        "history": f"xbsm {__version__}: xbsm.study.run of the study file in xbsm_study",
         "xbsm_method": method.describe(),
         **{f"xbsm_knob_{field.name}": str(getattr(getattr(method, field.name), "name",
                                                    getattr(method, field.name)))

@@ -33,10 +33,13 @@ from ._checks import (
     dimension_sizes,
 )
 from ._sections import (
+    MTF_VARIABLES,
+    NIIRS_VARIABLES,
     OUTPUT_GROUPS,
     SCHEDULERS,
     SENSOR_PRESETS,
     method_and_knobs,
+    output_variables,
     outputs_and_frequency,
     run_options,
     sensor_and_bands,
@@ -62,9 +65,9 @@ from ._values import (
 )
 
 __all__ = ["BAND_PARAMETERS", "MAX_SCENARIOS", "MAX_STUDY_BYTES", "MAX_SWEEP_VALUES",
-           "OUTPUT_GROUPS", "PARAMETERS", "RANGE_KEYS", "RESERVED_DIMS", "SCENARIO_PARAMETERS",
-           "SCHEDULERS", "SENSOR_PARAMETERS", "SENSOR_PRESETS", "TOP_KEYS", "Study",
-           "StudyError", "Sweep", "load", "parse"]
+           "MTF_VARIABLES", "NIIRS_VARIABLES", "OUTPUT_GROUPS", "PARAMETERS", "RANGE_KEYS",
+           "RESERVED_DIMS", "SCENARIO_PARAMETERS", "SCHEDULERS", "SENSOR_PARAMETERS",
+           "SENSOR_PRESETS", "TOP_KEYS", "Study", "StudyError", "Sweep", "load", "parse"]
 
 #: The largest study file read (a guard against passing a data file by mistake). [bytes]
 MAX_STUDY_BYTES = 10 * 2**20
@@ -106,6 +109,8 @@ class Study:
     output: str | None
     title: str
     text: str = dataclasses.field(repr=False, default="")
+    variables: tuple = ()  # the output variables kept ([outputs] variables); empty: all
+    compress: int = 0  # zlib level of the data variables in the NetCDF file; 0: none
 
     @property
     def sizes(self) -> dict:
@@ -203,11 +208,13 @@ def parse(text: str, name: str = "<study>") -> Study:
     check_size(src, bands, sweeps)
     method, knobs = method_and_knobs(src, doc)
     outputs, frequency = outputs_and_frequency(src, doc)
+    variables = output_variables(src, doc, outputs)
     dims = list(dimension_sizes(bands, sweeps))
     study = Study(sensor=MappingProxyType(sensor), bands=MappingProxyType(bands),
                   scenario=MappingProxyType(scenario), sweeps=sweeps, method=method,
                   knobs=MappingProxyType(knobs), outputs=outputs, mtf_frequency=frequency,
-                  title=doc.get("title", ""), text=text, **run_options(src, doc, dims))
+                  title=doc.get("title", ""), text=text, variables=variables,
+                  **run_options(src, doc, dims))
     check_model_inputs(src, study)
     return study
 
