@@ -106,6 +106,24 @@ def test_examples_of_other_pages_run(page, tmp_path, monkeypatch):
         exec(compile(block, f"docs/{page}.md block {number}", "exec"), namespace)
 
 
+def test_readme_notebook_example_runs_and_holds_niirs_to_its_scale(tmp_path, monkeypatch):
+    # the README's notebook snippet drew an axis down to -720 NIIRS (issue 21)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    monkeypatch.chdir(tmp_path)
+    plt.close("all")
+    try:
+        namespace: dict = {"__name__": "readme"}
+        for number, block in enumerate(python_blocks((ROOT / "README.md").read_text())):
+            exec(compile(block, f"README.md block {number}", "exec"), namespace)
+        assert plt.gca().get_ylim() == xbsm.plot.NIIRS_SCALE
+    finally:
+        plt.close("all")
+
+
 def test_guide_lists_every_method_knob():
     guide = read("guide")
     for knob in Method.knobs():

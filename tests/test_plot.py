@@ -390,3 +390,75 @@ def test_range_performance_refuses_what_it_cannot_draw(goal, range_niirs):
     extra = xr.concat([goal] * 2, dim=xr.DataArray([1.0, 2.0], dims="altitude"))
     with pytest.raises(ValueError, match="dimension 'altitude' besides"):
         plot.range_performance(extra, x="focal_length", hue="visibility", ax=_new_axes())
+
+
+# --- the notebook helpers on pyplot (issue 21 item 4) ----------------------------------------
+
+
+@pytest.fixture()
+def pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+    yield plt
+    plt.close("all")
+
+
+@pytest.fixture(scope="module")
+def olson_to_100km():
+    # the README's notebook example: the Olson camera (xbsm.examples) to 100 km; at 5 km
+    # visibility GIQE 5 NIIRS falls far below the 0-10 scale (-726 at 100 km, computed here)
+    import xbsm
+    from xbsm.examples import olson_scenario, olson_sensor
+
+    ranges = xr.DataArray(np.linspace(0.0, 100e3, 21), dims="ground_range")
+    return xbsm.niirs(olson_sensor(), olson_scenario(ground_range=ranges))
+
+
+def test_against_range_holds_niirs_to_its_scale_and_marks_where_it_leaves(pyplot,
+                                                                          olson_to_100km):
+    n = olson_to_100km.niirs.sel(giqe=5)
+    assert float(n.min()) < -100  # precondition: far off the scale
+    ax = plot.against_range(n, hue="visibility")
+    assert ax.get_ylim() == plot.NIIRS_SCALE
+    drawn = np.concatenate([np.asarray(line.get_ydata(), float) for line in ax.get_lines()])
+    assert np.nanmin(drawn) >= 0.0  # nothing below the scale is drawn (markers sit on 0)
+    below = [line for line in ax.get_lines() if line.get_marker() == "v"]
+    assert below and all(np.all(np.asarray(line.get_ydata()) == 0.0) for line in below)
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "NIIRS falls below 0 from here (not drawn)" in texts
+    assert "visibility = 5\u00a0km" in texts
+
+
+def test_against_range_with_flags_dashes_values_outside_the_calibration(pyplot,
+                                                                        olson_to_100km):
+    n = olson_to_100km.sel(giqe=5, visibility=23.0)
+    assert bool(flags.is_outside_calibration(n.flags).any())  # precondition
+    ax = plot.against_range(n.niirs, flags=n.flags)
+    assert any(line.get_linestyle() == "--" for line in ax.get_lines())
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "outside the GIQE calibration (extrapolated)" in texts
+
+
+def test_against_range_leaves_other_quantities_unbounded(pyplot, olson_to_100km):
+    gsd = olson_to_100km.gsd
+    ax = plot.against_range(gsd)
+    assert ax.get_ylim()[1] >= float(gsd.max())
+
+
+def test_noise_breakdown_on_a_new_figure_keeps_its_tick_labels_inside(pyplot):
+    import xbsm
+    from xbsm.examples import olson_scenario, olson_sensor
+
+    r = xbsm.snr(olson_sensor(), olson_scenario(ground_range=20e3, visibility=5.0))
+    ax = plot.noise_breakdown(r)
+    fig = ax.figure
+    assert fig.get_layout_engine() is not None
+    fig.canvas.draw()
+    drawn = ax.get_tightbbox(fig.canvas.get_renderer())  # the axes with its tick labels
+    box = fig.bbox
+    assert (drawn.x0 >= box.x0 - 0.5 and drawn.y0 >= box.y0 - 0.5
+            and drawn.x1 <= box.x1 + 0.5 and drawn.y1 <= box.y1 + 0.5), (drawn, box)
