@@ -82,6 +82,16 @@ def test_every_page_exists_and_index_links_to_each():
         assert f"({page}.md)" in index, page
 
 
+def test_index_links_show_page_titles_not_file_names():
+    # the index's table of pages showed "guide.md", "study.md", ... (issue 21): each link
+    # reads as the title (first heading) of the page it opens
+    links = re.findall(r"^\| \[([^\]]+)\]\(([a-z0-9_]+)\.md\) \|", read("index"), flags=re.M)
+    assert len(links) >= 15
+    for text, page in links:
+        heading = re.search(r"^# (.+)$", read(page), flags=re.M).group(1).strip()
+        assert text == heading, (page, text)
+
+
 def test_relative_links_between_pages_resolve():
     for page in PAGES + SITE_PAGES:
         for target in re.findall(r"\]\(([^)#:]+)(?:#[^)]*)?\)", read(page)):
