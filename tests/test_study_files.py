@@ -523,6 +523,37 @@ output = "out.nc"
             study.output) == (1, {"ground_range": 1}, "synchronous", 1, "out.nc")
 
 
+def test_printing_a_study_gives_a_summary_not_every_array():
+    # print(study) printed every parameter and array, 3343 characters for Example 1
+    # (issue 21); the summary's numbers come from the shipped study file (97 database
+    # ranges x 2 visibilities x 2 bands, one band per chunk) and chunk_sizes
+    study = load(cli.default_study_path())
+    text = str(study)
+    assert text == repr(study)
+    assert text.splitlines() == [
+        "<xbsm Study 'Paper Example 1: the Olson camera at 9 km'>",
+        "  scenarios: 388 (band 2 x ground_range 97 x visibility 2)",
+        "  chunks:    2 of at most 194 scenarios (band 1, ground_range 97, visibility 2)",
+        "  sweeps:    ground_range 97 values 0 to 300000 m; visibility [23, 5] km",
+        "  bands:     red, nir",
+        "  method:    accurate",
+        "  outputs:   niirs, mtf (111 MTF frequencies); variables: all",
+        "  run:       threads, 2 worker(s), output example1.nc",
+    ]
+    assert "array(" not in text and "mappingproxy" not in text
+
+
+def test_printing_a_study_names_paired_sweeps_knobs_and_run_options():
+    text = str(parse(appended(
+        "\n[sweep.target]\ntarget_reflectance = [0.1, 0.2]\n"
+        "background_reflectance = [0.05, 0.1]\n[method]\notf_wavelengths = 24\n"
+        '[outputs]\nvariables = ["niirs"]\n[run]\ncompress = 3\n')))
+    assert "scenarios: 4 (ground_range 2 x target 2)" in text
+    assert "target: target_reflectance [0.1, 0.2]; background_reflectance [0.05, 0.1]" in text
+    assert "method:    accurate (otf_wavelengths=24)" in text
+    assert "variables: niirs, flags" in text and "zlib level 3" in text
+
+
 def test_the_shipped_example1_study_parses():
     study = load(cli.default_study_path())
     # paper Sec. 3: red and NIR bands, 97 database ground ranges, 23 and 5 km visibility
