@@ -462,3 +462,55 @@ def test_noise_breakdown_on_a_new_figure_keeps_its_tick_labels_inside(pyplot):
     box = fig.bbox
     assert (drawn.x0 >= box.x0 - 0.5 and drawn.y0 >= box.y0 - 0.5
             and drawn.x1 <= box.x1 + 0.5 and drawn.y1 <= box.y1 + 0.5), (drawn, box)
+
+
+def _tick_texts(ax) -> list:
+    return [t.get_text() for t in ax.get_xticklabels()]
+
+
+def test_noise_breakdown_splits_self_emission_by_source_when_set(pyplot):
+    # an MWIR camera with cold shield, optics, cold filter and stray light all set
+    # (tests/test_noise.py MWIR): one bar per source instead of "emission / stray"
+    from test_noise import MWIR
+
+    import xbsm
+
+    sensor = xbsm.sensor(**MWIR)
+    r = xbsm.snr(sensor, xbsm.scenario(altitude=3000.0, ground_range=5000.0, visibility=23.0))
+    labels = _tick_texts(plot.noise_breakdown(r, sensor=sensor))
+    assert {"cold shield", "optics emission", "cold filter emission", "stray light"} <= set(
+        labels)
+    assert "emission / stray" not in labels
+    # a source that is off gets no bar
+    off = xbsm.sensor(**{**MWIR, "stray_irradiance": 0.0})
+    r_off = xbsm.snr(off, xbsm.scenario(altitude=3000.0, ground_range=5000.0, visibility=23.0))
+    assert "stray light" not in _tick_texts(plot.noise_breakdown(r_off, sensor=off))
+
+
+def test_noise_breakdown_draws_only_the_sources_that_contribute(pyplot):
+    # the Olson camera (visible/NIR): only its 70 K cold shield gives any photoelectrons
+    # (1e-46 electrons, computed with xbsm.noise.self_emission_noise_terms); its one
+    # emission bar is named for it, the sources that are off get none
+    import xbsm
+    from xbsm.examples import olson_scenario, olson_sensor
+
+    sensor = olson_sensor()
+    r = xbsm.snr(sensor, olson_scenario(ground_range=20e3, visibility=5.0))
+    plain = _tick_texts(plot.noise_breakdown(r))
+    labels = _tick_texts(plot.noise_breakdown(r, sensor=sensor))
+    assert "emission / stray" in plain and "cold shield" not in plain
+    assert labels == [("cold shield" if t == "emission / stray" else t) for t in plain]
+
+
+def test_noise_figure_of_a_study_splits_self_emission_by_source():
+    # the standard Figure 4 rebuilds the sensor from the result's study file
+    from test_noise import MWIR
+
+    sensor = "\n".join(f"{k} = {v!r}" for k, v in MWIR.items())
+    text = (f"[sensor]\n{sensor}\n[scenario]\naltitude = 3000.0\nvisibility = 23.0\n"
+            "[sweep]\nground_range = [5000.0, 20000.0]\n")
+    result = st.run(st.parse(text)).compute()
+    figures = dict(plot_figures._noise_figure(result, plot_figures._context(result)))
+    labels = _tick_texts(figures["figure4_noise.png"].axes[0])
+    assert {"cold shield", "optics emission", "cold filter emission", "stray light"} <= set(
+        labels)

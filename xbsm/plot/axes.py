@@ -135,22 +135,54 @@ def _line(ax, x, y, invalid, outside, scale, label, kwargs) -> set:
     return used
 
 
-def noise_breakdown(snr: xr.Dataset, ax=None):
+def noise_breakdown(snr: xr.Dataset, ax=None, sensor: xr.Dataset | None = None):
     """Bar chart of the noise terms of one scenario (paper Figure 4).
+
+    The self-emission and stray-light noise is one bar ("emission / stray"),
+    or one bar per source that contributes (cold shield, optics, cold filter,
+    stray light) when ``sensor`` is given or ``snr`` already carries the split
+    (:func:`xbsm.noise.self_emission_noise_terms`).
 
     Parameters
     ----------
     snr : xr.Dataset
         :func:`xbsm.snr` or :func:`xbsm.niirs` output reduced to a single scenario.
     ax : matplotlib.axes.Axes, optional
+        Default: a new pyplot figure with the constrained layout engine.
+    sensor : xr.Dataset, optional
+        The sensor of ``snr`` (:func:`xbsm.sensor`), to split the self-emission
+        noise by source.
 
     Returns
     -------
     matplotlib.axes.Axes
     """
     ax = _axes(ax)
+    if sensor is not None:
+        snr = _with_self_emission_split(snr, sensor)
     _noise_panel(ax, snr, {})
     return ax
+
+
+def _with_self_emission_split(ds: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
+    """``ds`` with the self-emission noise split by source, if it has that noise.
+
+    On the result's own ``wavelength`` grid (:func:`xbsm.snr`), else on 201
+    wavelengths across the sensor's band (:func:`xbsm.niirs` has none): the split
+    needs only each source's share, which both grids give to quadrature accuracy.
+    """
+    from .. import noise
+
+    if "self_emission_noise" not in ds or all(n in ds for n in noise.SELF_EMISSION_SOURCES):
+        return ds
+    if "wavelength" in ds.coords and ds["wavelength"].ndim == 1:
+        wavelength = ds["wavelength"]
+    else:
+        low, high = float(sensor["wavelength_min"]), float(sensor["wavelength_max"])
+        values = np.linspace(low, high, 201)
+        wavelength = xr.DataArray(values, dims="wavelength", coords={"wavelength": values})
+    return ds.merge(noise.self_emission_noise_terms(ds["self_emission_noise"], sensor,
+                                                    wavelength), compat="override")
 
 
 def mtf_breakdown(otf: xr.Dataset, focal_length: float, nyquist: float | None = None,
