@@ -134,6 +134,14 @@ def test_readme_notebook_example_runs_and_holds_niirs_to_its_scale(tmp_path, mon
         plt.close("all")
 
 
+def test_simulate_page_says_plainly_what_to_pass_for_a_box_far_edge():
+    # a reader passed inclusive indices to transform_boxes and every box came out one
+    # pixel short (issue 21); the page gives the rule and a worked box
+    page = " ".join(read("simulate").split())
+    assert "pass `x_max = last column + 1` and `y_max = last row + 1`" in page
+    assert "A box over columns 10 to 19 and rows 5 to 8 is `(10, 5, 20, 9)`" in page
+
+
 def test_guide_lists_every_method_knob():
     guide = read("guide")
     for knob in Method.knobs():
