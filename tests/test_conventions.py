@@ -69,7 +69,8 @@ EXPECTED_UNITS = MappingProxyType({
     "shot_noise": "count", "scene_noise": "count", "path_noise": "count",
     "self_emission_noise": "count", "dark_current_noise": "count",
     "quantization_noise": "count", "read_noise": "count", "other_noise": "count",
-    "total_noise": "count",
+    "total_noise": "count", "cold_shield_noise": "count", "optics_emission_noise": "count",
+    "cold_filter_emission_noise": "count", "stray_light_noise": "count",
     "spectral_weights": "s-1 m-1",
     "path_rate": "s-1", "target_scene_rate": "s-1", "background_scene_rate": "s-1",
     "sensor_rate": "s-1",
@@ -247,6 +248,8 @@ def _cases():
             band_edges="exact"),
         "signal_terms": _signal,
         "noise_terms": lambda: noise.noise_terms(_signal(), s),
+        "self_emission_noise_terms": lambda: noise.self_emission_noise_terms(
+            noise.noise_terms(_signal(), s).self_emission_noise, s, _signal().wavelength),
         # geometry
         "slant_range": lambda: geometry.slant_range(rng, 9000.0),
         "viewing_geometry": lambda: geometry.viewing_geometry(rng, 9000.0, 8e-6, 8e-6, 4.0),

@@ -83,6 +83,16 @@ def test_every_page_exists_and_index_links_to_each():
         assert f"({page}.md)" in index, page
 
 
+def test_index_links_show_page_titles_not_file_names():
+    # the index's table of pages showed "guide.md", "study.md", ... (issue 21): each link
+    # reads as the title (first heading) of the page it opens
+    links = re.findall(r"^\| \[([^\]]+)\]\(([a-z0-9_]+)\.md\) \|", read("index"), flags=re.M)
+    assert len(links) >= 15
+    for text, page in links:
+        heading = re.search(r"^# (.+)$", read(page), flags=re.M).group(1).strip()
+        assert text == heading, (page, text)
+
+
 def test_relative_links_between_pages_resolve():
     for page in PAGES + SITE_PAGES:
         for target in re.findall(r"\]\(([^)#:]+)(?:#[^)]*)?\)", read(page)):
@@ -107,6 +117,32 @@ def test_examples_of_other_pages_run(page, tmp_path, monkeypatch):
         exec(compile(block, f"docs/{page}.md block {number}", "exec"), namespace)
 
 
+def test_readme_notebook_example_runs_and_holds_niirs_to_its_scale(tmp_path, monkeypatch):
+    # the README's notebook snippet drew an axis down to -720 NIIRS (issue 21)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    monkeypatch.chdir(tmp_path)
+    plt.close("all")
+    try:
+        namespace: dict = {"__name__": "readme"}
+        for number, block in enumerate(python_blocks((ROOT / "README.md").read_text())):
+            exec(compile(block, f"README.md block {number}", "exec"), namespace)
+        assert plt.gca().get_ylim() == xbsm.plot.NIIRS_SCALE
+    finally:
+        plt.close("all")
+
+
+def test_simulate_page_says_plainly_what_to_pass_for_a_box_far_edge():
+    # a reader passed inclusive indices to transform_boxes and every box came out one
+    # pixel short (issue 21); the page gives the rule and a worked box
+    page = " ".join(read("simulate").split())
+    assert "pass `x_max = last column + 1` and `y_max = last row + 1`" in page
+    assert "A box over columns 10 to 19 and rows 5 to 8 is `(10, 5, 20, 9)`" in page
+
+
 def test_guide_lists_every_method_knob():
     guide = read("guide")
     for knob in Method.knobs():
@@ -124,6 +160,64 @@ def test_migration_table_has_every_pybsm_keyword(table):
         first = re.match(r"[a-z_0-9]+", xbsm_name)
         if first:
             assert f"`{first.group(0)}" in row.group(1), (pybsm_name, xbsm_name)
+
+
+def _function_rows(page: str):
+    """(section, pyBSM cell, xbsm cell) of every table row from '## Functions' on."""
+    text = read(page)
+    section = ""
+    for line in text[text.index("## Functions"):].splitlines():
+        if line.startswith("#"):
+            section = line
+        elif line.startswith("|") and not set(line) <= set("|- "):
+            cells = [cell.strip() for cell in line.strip().strip("|").split(" | ")]
+            if cells[0] in ("pyBSM", "pyBSM 0.16.1"):
+                continue
+            yield section, cells[0], cells[1]
+
+
+# variables of the results the "Result objects become datasets" table maps to
+_RESULT_VARIABLES = None
+
+
+def _result_variables() -> set:
+    global _RESULT_VARIABLES
+    if _RESULT_VARIABLES is None:
+        sensor, scenario = xbsm.examples.olson_sensor(), xbsm.examples.olson_scenario()
+        _RESULT_VARIABLES = {*xbsm.niirs(sensor, scenario).variables,
+                             *xbsm.snr(sensor, scenario).variables}
+    return _RESULT_VARIABLES
+
+
+def test_migration_rows_name_a_counterpart_that_exists_or_say_why_there_is_none():
+    # docs/migration.md from "## Functions" on: every row names an xbsm function (or
+    # module, or result variable) that exists, or says "no counterpart: <reason>"; the
+    # page said image simulation was "not in xbsm yet" long after it was (issue 21)
+    import xbsm.examples  # noqa: F401
+
+    page = read("migration")
+    assert not re.search(r"not (in xbsm )?yet", page, flags=re.I)
+    rows = list(_function_rows("migration"))
+    assert len(rows) > 60
+    names = re.compile(r"`(xbsm(?:\.[A-Za-z_][A-Za-z0-9_]*)+)")
+    for section, pybsm, counterpart in rows:
+        where = (section, pybsm)
+        if counterpart.startswith("no counterpart"):
+            reason = counterpart.removeprefix("no counterpart").lstrip(":").strip()
+            assert counterpart.startswith("no counterpart: ") and len(reason.split()) >= 4, where
+            continue
+        found = [resolve(dotted) for dotted in names.findall(counterpart)]
+        same = re.match(r"same names? in `(xbsm[a-z_.]*)`", counterpart)
+        if same:  # the pyBSM names themselves, in that xbsm module
+            module = importlib.import_module(same.group(1))
+            found += [getattr(module, name) for name in re.findall(r"`([a-z_0-9]+)`", pybsm)]
+        if not found:  # a result variable: the first word of each backticked name
+            named = counterpart.split(" (")[0]  # what follows in parentheses is a note
+            variables = [re.match(r"[A-Za-z_0-9]+", token).group(0)
+                         for token in re.findall(r"`([^`]+)`", named)]
+            assert variables and all(v in _result_variables() for v in variables), where
+            found = variables
+        assert found, where
 
 
 def test_every_xbsm_name_in_backticks_exists():

@@ -88,3 +88,56 @@ def test_noise_terms_dask_equals_eager_and_stays_lazy(no_compute):
         assert isinstance(lazy[name].data, dask.array.Array), name
     with dask.config.set(scheduler="sync"):
         xr.testing.assert_identical(lazy.compute(), noise.noise_terms(*_noise_inputs()))
+
+
+# --- self-emission and stray light by source (issue 21 item 8) -------------------------------
+
+# An MWIR camera with every source of its own irradiance set; max_well large enough that no
+# configuration below is well-fill limited (the integration time is the same in every run)
+MWIR = dict(aperture_diameter=0.2, focal_length=1.0, pixel_pitch_x=15e-6,
+            wavelength_min=3e-6, wavelength_max=5e-6, integration_time=1e-3, max_well=1e9,
+            cold_shield_temperature=200.0, optics_temperature=290.0, optics_emissivity=0.1,
+            cold_filter_transmission=0.9, cold_filter_temperature=150.0,
+            cold_filter_emissivity=0.1, stray_irradiance=1e-3)
+# each source alone (the others off; a 1 K cold shield emits nothing at 3-5 um in float64)
+ALONE = {
+    "cold_shield_noise": dict(optics_emissivity=0.0, cold_filter_emissivity=0.0,
+                              stray_irradiance=0.0),
+    "optics_emission_noise": dict(cold_shield_temperature=1.0, cold_filter_emissivity=0.0,
+                                  stray_irradiance=0.0),
+    "cold_filter_emission_noise": dict(cold_shield_temperature=1.0, optics_emissivity=0.0,
+                                       stray_irradiance=0.0),
+    "stray_light_noise": dict(cold_shield_temperature=1.0, optics_emissivity=0.0,
+                              cold_filter_emissivity=0.0),
+}
+
+
+def _snr(**overrides):
+    import xbsm
+
+    sensor = xbsm.sensor(**{**MWIR, **overrides})
+    scenario = xbsm.scenario(altitude=3000.0, ground_range=5000.0, visibility=23.0)
+    return sensor, xbsm.snr(sensor, scenario)
+
+
+def test_self_emission_split_equals_each_source_alone():
+    # Poisson variances add: each source's term equals the self-emission noise the model
+    # gives with that source alone (xbsm.snr, same integration time)
+    sensor, r = _snr()
+    terms = noise.self_emission_noise_terms(r.self_emission_noise, sensor, r.wavelength)
+    assert set(terms.data_vars) == set(noise.SELF_EMISSION_SOURCES)
+    for name, off in ALONE.items():
+        _, alone = _snr(**off)
+        assert float(alone.effective_integration_time) == float(r.effective_integration_time)
+        assert float(terms[name]) == pytest.approx(float(alone.self_emission_noise), rel=1e-9)
+        assert float(terms[name]) > 0
+    # and they add in quadrature to the total
+    total = np.sqrt(sum(float(terms[name]) ** 2 for name in terms.data_vars))
+    assert total == pytest.approx(float(r.self_emission_noise), rel=1e-12)
+
+
+def test_self_emission_split_of_a_source_that_is_off_is_zero():
+    sensor, r = _snr(stray_irradiance=0.0)
+    terms = noise.self_emission_noise_terms(r.self_emission_noise, sensor, r.wavelength)
+    assert float(terms.stray_light_noise) == 0.0
+    assert float(terms.cold_shield_noise) > 0

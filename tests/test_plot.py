@@ -284,8 +284,13 @@ def goal(range_niirs):
     cell = {"focal_length": 2, "visibility": 0, "ground_range": 4}  # f = 8 m, 23 km, 70 km
     bits[cell] = bits[cell] | flags.flag("snr_nonpositive")  # an invalid cell ends the search
     out = st.max_range(niirs, 4.5, flags=bits)
-    # precondition (from the NIIRS values above): exact, grid edge, invalid cell; never meets
-    assert out.goal_flags.sel(visibility=23.0).values.tolist() == [0, 2, 4]
+    # precondition (from the NIIRS values above): exact, grid edge, invalid cell; never meets;
+    # every answer at 23 km lands 40-80 km from a 9 km altitude, below the GIQE 5 elevation
+    # calibration (xbsm.metrics.GIQE_CALIBRATIONS; decode(out.flags) shows
+    # elevation_out_of_range on all three): outside_calibration (8) on each
+    outside = st.goals.GOAL_FLAGS["outside_calibration"]
+    assert (out.goal_flags.sel(visibility=23.0) & ~outside).values.tolist() == [0, 2, 4]
+    assert ((out.goal_flags.sel(visibility=23.0) & outside) != 0).all()
     assert out.goal_flags.sel(visibility=5.0).values.tolist() == [1, 1, 1]
     return out
 
@@ -367,7 +372,9 @@ def test_range_performance_of_min_parameter_points_bounds_down(range_niirs):
     niirs, bits = range_niirs
     smallest = st.min_parameter(niirs, 4.5, "focal_length", flags=bits)
     # precondition: f = 2 m (the first swept) already meets 4.5 at 23 km out to 70 km
-    assert smallest.goal_flags.sel(visibility=23.0).values.tolist()[:5] == [2] * 5
+    # (each also outside_calibration, 8: elevations below GIQE 5's at 40-80 km, as above)
+    outside = st.goals.GOAL_FLAGS["outside_calibration"]
+    assert (smallest.goal_flags.sel(visibility=23.0) & ~outside).values.tolist()[:5] == [2] * 5
     ax = plot.range_performance(smallest, x="ground_range", ax=_new_axes())
     assert ax.get_xlabel() == "ground range [km]"
     assert ax.get_ylabel() == "smallest focal length [m]"
@@ -383,3 +390,127 @@ def test_range_performance_refuses_what_it_cannot_draw(goal, range_niirs):
     extra = xr.concat([goal] * 2, dim=xr.DataArray([1.0, 2.0], dims="altitude"))
     with pytest.raises(ValueError, match="dimension 'altitude' besides"):
         plot.range_performance(extra, x="focal_length", hue="visibility", ax=_new_axes())
+
+
+# --- the notebook helpers on pyplot (issue 21 item 4) ----------------------------------------
+
+
+@pytest.fixture()
+def pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+    yield plt
+    plt.close("all")
+
+
+@pytest.fixture(scope="module")
+def olson_to_100km():
+    # the README's notebook example: the Olson camera (xbsm.examples) to 100 km; at 5 km
+    # visibility GIQE 5 NIIRS falls far below the 0-10 scale (-726 at 100 km, computed here)
+    import xbsm
+    from xbsm.examples import olson_scenario, olson_sensor
+
+    ranges = xr.DataArray(np.linspace(0.0, 100e3, 21), dims="ground_range")
+    return xbsm.niirs(olson_sensor(), olson_scenario(ground_range=ranges))
+
+
+def test_against_range_holds_niirs_to_its_scale_and_marks_where_it_leaves(pyplot,
+                                                                          olson_to_100km):
+    n = olson_to_100km.niirs.sel(giqe=5)
+    assert float(n.min()) < -100  # precondition: far off the scale
+    ax = plot.against_range(n, hue="visibility")
+    assert ax.get_ylim() == plot.NIIRS_SCALE
+    drawn = np.concatenate([np.asarray(line.get_ydata(), float) for line in ax.get_lines()])
+    assert np.nanmin(drawn) >= 0.0  # nothing below the scale is drawn (markers sit on 0)
+    below = [line for line in ax.get_lines() if line.get_marker() == "v"]
+    assert below and all(np.all(np.asarray(line.get_ydata()) == 0.0) for line in below)
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "NIIRS falls below 0 from here (not drawn)" in texts
+    assert "visibility = 5\u00a0km" in texts
+
+
+def test_against_range_with_flags_dashes_values_outside_the_calibration(pyplot,
+                                                                        olson_to_100km):
+    n = olson_to_100km.sel(giqe=5, visibility=23.0)
+    assert bool(flags.is_outside_calibration(n.flags).any())  # precondition
+    ax = plot.against_range(n.niirs, flags=n.flags)
+    assert any(line.get_linestyle() == "--" for line in ax.get_lines())
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "outside the GIQE calibration (extrapolated)" in texts
+
+
+def test_against_range_leaves_other_quantities_unbounded(pyplot, olson_to_100km):
+    gsd = olson_to_100km.gsd
+    ax = plot.against_range(gsd)
+    assert ax.get_ylim()[1] >= float(gsd.max())
+
+
+def test_noise_breakdown_on_a_new_figure_keeps_its_tick_labels_inside(pyplot):
+    import xbsm
+    from xbsm.examples import olson_scenario, olson_sensor
+
+    r = xbsm.snr(olson_sensor(), olson_scenario(ground_range=20e3, visibility=5.0))
+    ax = plot.noise_breakdown(r)
+    fig = ax.figure
+    assert fig.get_layout_engine() is not None
+    fig.canvas.draw()
+    drawn = ax.get_tightbbox(fig.canvas.get_renderer())  # the axes with its tick labels
+    box = fig.bbox
+    assert (drawn.x0 >= box.x0 - 0.5 and drawn.y0 >= box.y0 - 0.5
+            and drawn.x1 <= box.x1 + 0.5 and drawn.y1 <= box.y1 + 0.5), (drawn, box)
+
+
+def _tick_texts(ax) -> list:
+    return [t.get_text() for t in ax.get_xticklabels()]
+
+
+def test_noise_breakdown_splits_self_emission_by_source_when_set(pyplot):
+    # an MWIR camera with cold shield, optics, cold filter and stray light all set
+    # (tests/test_noise.py MWIR): one bar per source instead of "emission / stray"
+    from test_noise import MWIR
+
+    import xbsm
+
+    sensor = xbsm.sensor(**MWIR)
+    r = xbsm.snr(sensor, xbsm.scenario(altitude=3000.0, ground_range=5000.0, visibility=23.0))
+    labels = _tick_texts(plot.noise_breakdown(r, sensor=sensor))
+    assert {"cold shield", "optics emission", "cold filter emission", "stray light"} <= set(
+        labels)
+    assert "emission / stray" not in labels
+    # a source that is off gets no bar
+    off = xbsm.sensor(**{**MWIR, "stray_irradiance": 0.0})
+    r_off = xbsm.snr(off, xbsm.scenario(altitude=3000.0, ground_range=5000.0, visibility=23.0))
+    assert "stray light" not in _tick_texts(plot.noise_breakdown(r_off, sensor=off))
+
+
+def test_noise_breakdown_draws_only_the_sources_that_contribute(pyplot):
+    # the Olson camera (visible/NIR): only its 70 K cold shield gives any photoelectrons
+    # (1e-46 electrons, computed with xbsm.noise.self_emission_noise_terms); its one
+    # emission bar is named for it, the sources that are off get none
+    import xbsm
+    from xbsm.examples import olson_scenario, olson_sensor
+
+    sensor = olson_sensor()
+    r = xbsm.snr(sensor, olson_scenario(ground_range=20e3, visibility=5.0))
+    plain = _tick_texts(plot.noise_breakdown(r))
+    labels = _tick_texts(plot.noise_breakdown(r, sensor=sensor))
+    assert "emission / stray" in plain and "cold shield" not in plain
+    assert labels == [("cold shield" if t == "emission / stray" else t) for t in plain]
+
+
+def test_noise_figure_of_a_study_splits_self_emission_by_source():
+    # the standard Figure 4 rebuilds the sensor from the result's study file
+    from test_noise import MWIR
+
+    sensor = "\n".join(f"{k} = {v!r}" for k, v in MWIR.items())
+    text = (f"[sensor]\n{sensor}\n[scenario]\naltitude = 3000.0\nvisibility = 23.0\n"
+            "[sweep]\nground_range = [5000.0, 20000.0]\n")
+    result = st.run(st.parse(text)).compute()
+    figures = dict(plot_figures._noise_figure(result, plot_figures._context(result)))
+    labels = _tick_texts(figures["figure4_noise.png"].axes[0])
+    assert {"cold shield", "optics emission", "cold filter emission", "stray light"} <= set(
+        labels)

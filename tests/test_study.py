@@ -249,6 +249,139 @@ def test_distributed_local_cluster(tiny, tmp_path):
         assert written.niirs.shape == (3, 2, 3)
 
 
+# --- CF details, output variables and compression (issue 21 item 7) ----------------------
+
+CF_STUDY = """
+title = "cf"
+[sensor]
+preset = "olson"
+band = ["red", "nir"]
+[scenario]
+altitude = 9000.0
+platform_speed = 100.0
+[sweep]
+ground_range = [0.0, 20000.0, 60000.0]
+visibility = [23.0, 5.0]
+[outputs]
+include = ["niirs", "mtf"]
+mtf_frequency = { start = 0.0, stop = 5e5, num = 5 }
+"""
+
+
+@pytest.fixture(scope="module")
+def cf_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("cf") / "cf.nc"
+    study.write(study.run(study.parse(CF_STUDY)), path, scheduler="synchronous")
+    return path
+
+
+def test_written_study_names_its_flags_and_explains_them(cf_file):
+    import netCDF4
+
+    with netCDF4.Dataset(cf_file) as nc:  # what ncdump -h shows
+        names = set(nc.variables)
+        for name, var in nc.variables.items():
+            if name in nc.dimensions:  # coordinate variables: no fill value (CF 2.5.1)
+                assert "_FillValue" not in var.ncattrs(), name
+            elif name not in ("flags", "mtf_flags") and name not in ("wavelength_min",
+                                                                     "wavelength_max"):
+                flag = "mtf_flags" if name.startswith("mtf_") else "flags"
+                assert var.getncattr("ancillary_variables") == flag, name
+                assert flag in names
+        assert nc.variables["giqe"].getncattr("units") == "1"
+        assert nc.variables["giqe"].dtype == np.int32  # CF 1.8 has no 64-bit integers
+        comment = nc.variables["flags"].getncattr("comment")
+        assert "band, ground_range, visibility, giqe" in comment
+        assert "apply to niirs only, per GIQE version" in comment
+        assert "gsd" in comment and "snr" in comment  # the variables it describes
+        assert "mtf_system" in nc.variables["mtf_flags"].getncattr("comment")
+        assert "history" in nc.ncattrs()
+
+
+def test_written_study_passes_the_cf_checker(cf_file):
+    # compliance-checker (IOOS, the package index's CF 1.8 checker; it carries its own
+    # standard-name table, so it runs offline): no error and no warning. Before issue 21
+    # it found 4 errors (int64 giqe, _FillValue on 3 coordinates) and 1 warning (history)
+    # on example1.nc.
+    pytest.importorskip("compliance_checker")
+    import json
+    import warnings
+
+    from compliance_checker.runner import CheckSuite, ComplianceChecker
+
+    report = cf_file.with_suffix(".json")
+    with warnings.catch_warnings():  # its own deprecation of its IOOS SOS suites
+        warnings.simplefilter("ignore")
+        CheckSuite().load_all_available_checkers()
+        ComplianceChecker.run_checker(str(cf_file), ["cf:1.8"], 0, "normal",
+                                      output_filename=str(report), output_format="json")
+    results = json.loads(report.read_text())["cf:1.8"]
+    messages = {group: [m for r in results[group] for m in r["msgs"]]
+                for group in ("high_priorities", "medium_priorities")}
+    assert messages == {"high_priorities": [], "medium_priorities": []}
+
+
+def test_every_output_variable_name_is_known_to_the_study_file():
+    # [outputs] variables is checked when the file is read against these lists; they are
+    # exactly what the model writes (a study with both output groups and no selection)
+    from xbsm.study.spec import MTF_VARIABLES, NIIRS_VARIABLES
+
+    result = study.run(study.parse(CF_STUDY))
+    assert set(result.data_vars) == set(NIIRS_VARIABLES) | set(MTF_VARIABLES)
+
+
+def test_output_variables_keep_only_those_and_their_flags():
+    text = CF_STUDY.replace('mtf_frequency', 'variables = ["niirs", "mtf_system"]\nmtf_frequency')
+    result = study.run(study.parse(text))
+    assert set(result.data_vars) == {"niirs", "mtf_system", "flags", "mtf_flags"}
+    assert "frequency" in result.coords and "orientation" in result.coords
+    niirs_only = study.run(study.parse(TINY.replace("[run]", '[outputs]\nvariables = ["niirs"]'
+                                                               "\n[run]")))
+    assert set(niirs_only.data_vars) == {"niirs", "flags"}
+    xr.testing.assert_equal(niirs_only.niirs.compute(), study.run(tiny_spec()).niirs.compute())
+
+
+def tiny_spec():
+    return study.parse(TINY, "tiny.toml")
+
+
+def test_compress_writes_every_data_variable_with_zlib_at_that_level(tmp_path):
+    import netCDF4
+
+    plain = study.run(tiny_spec())
+    packed = study.run(study.parse(TINY.replace("[run]", "[run]\ncompress = 4")))
+    arrays = [name for name, var in packed.data_vars.items() if var.ndim]  # scalars: whole
+    assert len(arrays) > 20
+    assert all(packed[name].encoding == {"zlib": True, "complevel": 4, "shuffle": True}
+               for name in arrays)
+    assert not any(var.encoding.get("zlib") for var in plain.data_vars.values())
+    for name, result in (("plain", plain), ("packed", packed)):
+        path = study.write(result, tmp_path / f"{name}.nc", scheduler="synchronous")
+        with netCDF4.Dataset(path) as nc:
+            for var_name in arrays:
+                filters = nc.variables[var_name].filters()
+                assert bool(filters["zlib"]) == (name == "packed"), var_name
+                assert filters["complevel"] == (4 if name == "packed" else 0), var_name
+        with xr.open_dataset(path) as back:  # lossless
+            xr.testing.assert_equal(back.niirs, plain.niirs.compute())
+
+
+def test_cf_encoding_is_what_a_writer_passes_to_to_netcdf(tmp_path):
+    from xbsm.study._cf import cf_encoding
+
+    result = study.run(study.parse(TINY.replace("[run]", "[run]\ncompress = 2"))).compute()
+    encoding = cf_encoding(result)
+    assert encoding["ground_range"] == {"_FillValue": None}
+    assert encoding["niirs"] == {"zlib": True, "complevel": 2, "shuffle": True}
+    bare = result.copy()
+    for var in bare.variables.values():
+        var.encoding = {}  # a writer that rebuilt the variables and lost their encoding
+    bare.to_netcdf(tmp_path / "out.nc", encoding=encoding)
+    with xr.open_dataset(tmp_path / "out.nc") as back:
+        assert back.niirs.encoding["complevel"] == 2
+        assert "_FillValue" not in back.ground_range.encoding
+
+
 # --- range performance ------------------------------------------------------------------
 
 
@@ -295,6 +428,60 @@ def test_min_parameter_over_other_dimensions_at_once():
     out = study.min_parameter(niirs, 5.0, "aperture_diameter")
     # 5.0 is met first at 0.2 (vis 23: exactly) and between 0.3 (4.5) and 0.4 (5.5) for vis 5
     np.testing.assert_allclose(out.min_aperture_diameter.values, [0.2, 0.35], rtol=1e-12)
+
+
+def test_max_range_says_when_it_lands_outside_the_calibration():
+    # NIIRS 8, 7, 5, 3 at 0-30 km: 6 is crossed between 10 and 20 km; the 20 km cell has
+    # elevation_out_of_range (a calibration bit, xbsm.flags.CALIBRATION), so the answer is
+    # interpolated from an extrapolated cell and says so, with the cells' own flags
+    niirs = _line([8, 7, 5, 3], [0.0, 10e3, 20e3, 30e3])
+    flags = xr.zeros_like(niirs, dtype=np.int32).assign_attrs(xbsm.flags.flag_attrs())
+    flags[2:] = xbsm.flags.flag("elevation_out_of_range")
+    out = study.max_range(niirs, 6.0, flags=flags)
+    assert float(out.max_range) == pytest.approx(15e3, rel=1e-12)
+    assert int(out.goal_flags) == study.goals.GOAL_FLAGS["outside_calibration"]
+    assert bool(xbsm.flags.decode(out.goal_flags).outside_calibration)
+    assert bool(xbsm.flags.decode(out.flags).elevation_out_of_range)
+    assert bool(xbsm.flags.is_outside_calibration(out.flags))
+    # a requirement met exactly on the calibrated 10 km cell (7) uses that cell only
+    exact = study.max_range(niirs, 7.0, flags=flags)
+    assert float(exact.max_range) == 10e3 and int(exact.goal_flags) == 0
+    assert int(exact.flags) == 0
+
+
+def test_min_parameter_says_when_it_lands_outside_the_calibration():
+    # NIIRS 4, 6, 8 over apertures 0.1, 0.2, 0.3 m: 5 is met between 0.1 and 0.2 m; the
+    # 0.1 m cell has rer_out_of_range and q_out_of_range (xbsm.flags.CALIBRATION)
+    d = np.array([0.1, 0.2, 0.3])
+    niirs = _line([4.0, 6.0, 8.0], d, dim="aperture_diameter")
+    flags = xr.zeros_like(niirs, dtype=np.int32).assign_attrs(xbsm.flags.flag_attrs())
+    flags[0] = xbsm.flags.flag("rer_out_of_range") | xbsm.flags.flag("q_out_of_range")
+    out = study.min_parameter(niirs, 5.0, "aperture_diameter", flags=flags)
+    assert float(out.min_aperture_diameter) == pytest.approx(0.15, rel=1e-12)
+    assert int(out.goal_flags) == study.goals.GOAL_FLAGS["outside_calibration"]
+    bits = xbsm.flags.decode(out.flags)
+    assert bool(bits.rer_out_of_range) and bool(bits.q_out_of_range)
+    # 6 is met first, exactly, at 0.2 m (calibrated): nothing to say
+    assert int(study.min_parameter(niirs, 6.0, "aperture_diameter", flags=flags).goal_flags) == 0
+
+
+def test_max_range_on_a_model_result_flags_a_low_elevation_answer():
+    # the Olson camera at 1 km altitude (xbsm.examples): far ground ranges look at a few
+    # degrees of elevation, outside every GIQE's calibration (xbsm.metrics.GIQE_CALIBRATIONS)
+    ranges = xr.DataArray(np.linspace(0.0, 30e3, 16), dims="ground_range")
+    n = xbsm.niirs(olson_sensor(), olson_scenario(ground_range=ranges, altitude=1000.0,
+                                                  visibility=23.0))
+    niirs5, flags5 = n.niirs.sel(giqe=5), n.flags.sel(giqe=5)
+    assert niirs5.dims == ("ground_range",)
+    low = float(niirs5.min()) + 0.01
+    out = study.max_range(niirs5, low, flags=flags5)
+    assert bool(xbsm.flags.decode(out.flags).elevation_out_of_range)
+    assert int(out.goal_flags) & study.goals.GOAL_FLAGS["outside_calibration"]
+
+
+def test_probability_meets_is_named_for_what_it_is():
+    p = study.probability_meets(xr.DataArray([5.0], name="niirs"), 5.0)
+    assert p.name == "probability_meets"
 
 
 def test_goals_on_a_study_result_stay_lazy(tiny):

@@ -276,6 +276,14 @@ BAD = [
         "threads, synchronous, local-cluster"),
     row("zero_workers", run_table("workers = 0"), "run.workers", 15, "whole number >= 1"),
     row("empty_output_path", run_table('output = ""'), "run.output", 15, "file name"),
+    row("compress_above_9", run_table("compress = 10"), "run.compress", 15, "0 (no compression)"),
+    row("compress_as_text", run_table('compress = "zlib"'), "run.compress", 15, "to 9"),
+    row("unknown_output_variable", outputs('variables = ["nirs"]'), "outputs.variables", 15,
+        "did you mean 'niirs'"),
+    row("output_variables_not_a_list", outputs('variables = "niirs"'), "outputs.variables", 15,
+        "non-empty list"),
+    row("mtf_variable_without_mtf", outputs('variables = ["mtf_system"]'), "outputs.variables",
+        15, 'add "mtf" to include'),
 ]
 
 
@@ -513,6 +521,37 @@ output = "out.nc"
     np.testing.assert_array_equal(study.mtf_frequency, np.arange(11) * 1e4)
     assert (study.chunk_scenarios, dict(study.chunks), study.scheduler, study.workers,
             study.output) == (1, {"ground_range": 1}, "synchronous", 1, "out.nc")
+
+
+def test_printing_a_study_gives_a_summary_not_every_array():
+    # print(study) printed every parameter and array, 3343 characters for Example 1
+    # (issue 21); the summary's numbers come from the shipped study file (97 database
+    # ranges x 2 visibilities x 2 bands, one band per chunk) and chunk_sizes
+    study = load(cli.default_study_path())
+    text = str(study)
+    assert text == repr(study)
+    assert text.splitlines() == [
+        "<xbsm Study 'Paper Example 1: the Olson camera at 9 km'>",
+        "  scenarios: 388 (band 2 x ground_range 97 x visibility 2)",
+        "  chunks:    2 of at most 194 scenarios (band 1, ground_range 97, visibility 2)",
+        "  sweeps:    ground_range 97 values 0 to 300000 m; visibility [23, 5] km",
+        "  bands:     red, nir",
+        "  method:    accurate",
+        "  outputs:   niirs, mtf (111 MTF frequencies); variables: all",
+        "  run:       threads, 2 worker(s), output example1.nc",
+    ]
+    assert "array(" not in text and "mappingproxy" not in text
+
+
+def test_printing_a_study_names_paired_sweeps_knobs_and_run_options():
+    text = str(parse(appended(
+        "\n[sweep.target]\ntarget_reflectance = [0.1, 0.2]\n"
+        "background_reflectance = [0.05, 0.1]\n[method]\notf_wavelengths = 24\n"
+        '[outputs]\nvariables = ["niirs"]\n[run]\ncompress = 3\n')))
+    assert "scenarios: 4 (ground_range 2 x target 2)" in text
+    assert "target: target_reflectance [0.1, 0.2]; background_reflectance [0.05, 0.1]" in text
+    assert "method:    accurate (otf_wavelengths=24)" in text
+    assert "variables: niirs, flags" in text and "zlib level 3" in text
 
 
 def test_the_shipped_example1_study_parses():

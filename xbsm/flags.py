@@ -207,30 +207,80 @@ def is_outside_calibration(flags: xr.DataArray) -> xr.DataArray:
 
 
 def decode(flags: xr.DataArray) -> xr.Dataset:
-    """One boolean variable per flag name: where that bit of ``flags`` is set.
+    """One boolean variable per flag meaning: where that bit of ``flags`` is set.
+
+    The bits are read from the variable's own CF attributes, ``flag_masks``
+    and ``flag_meanings``, so every flag variable xbsm writes decodes by its
+    own table: the model's ``flags`` (the bits of :data:`FLAGS`), ``goal_flags``
+    of :func:`xbsm.study.max_range` and :func:`~xbsm.study.min_parameter`,
+    ``grd_flags``, ``mtf_flags`` and the flags of image simulation, also when
+    read back from NetCDF.
 
     Parameters
     ----------
     flags : xr.DataArray
-        A ``flags`` variable of an xbsm result (any dims; dask stays lazy).
+        An integer flag variable with ``flag_masks`` and ``flag_meanings``
+        attributes (any dims; dask stays lazy). To decode bare integers as the
+        model's bits, give them the model's attributes first:
+        ``values.assign_attrs(xbsm.flags.flag_attrs())``.
 
     Returns
     -------
     xr.Dataset
-        A boolean variable for every name of :data:`FLAGS`, plus ``invalid`` and
-        ``outside_calibration`` (any bit of :data:`INVALID` / :data:`CALIBRATION`),
-        on the dims of ``flags``.
+        A boolean variable for every meaning of ``flag_meanings``, on the dims
+        of ``flags``. For the model's bits, also ``invalid`` and
+        ``outside_calibration`` (any bit of :data:`INVALID` /
+        :data:`CALIBRATION`).
+
+    Raises
+    ------
+    ValueError
+        If ``flags`` has no ``flag_masks`` and ``flag_meanings`` (nothing says
+        what its bits mean), or they do not pair up one to one.
 
     Examples
     --------
     >>> import xarray as xr
-    >>> bits = decode(xr.DataArray([0, 4 | 512], dims="case"))
+    >>> raw = xr.DataArray([0, 4 | 512], dims="case").assign_attrs(flag_attrs())
+    >>> bits = decode(raw)
     >>> bits.snr_nonpositive.values.tolist(), bits.invalid.values.tolist()
     ([False, True], [False, True])
     """
-    described = {name: (has_flag(flags, name), FLAGS[name][1]) for name in FLAGS}
-    described["invalid"] = (is_invalid(flags), "any bit saying the number is NaN or may be wrong")
-    described["outside_calibration"] = (
-        is_outside_calibration(flags), "any bit saying a GIQE is used outside its calibration")
+    meanings, masks = _flag_table(flags)
+    described = {}
+    for name, mask in zip(meanings, masks, strict=True):
+        known = FLAGS.get(name)
+        text = known[1] if known is not None and known[0] == mask else name.replace("_", " ")
+        described[name] = ((flags & np.int64(mask)) != 0, text)
+    if all(FLAGS.get(name, (None,))[0] == mask for name, mask in zip(meanings, masks,
+                                                                      strict=True)):
+        # the model's own bits (all of them, or a subset): the groups are defined too
+        if "invalid" not in described:
+            described["invalid"] = (
+                is_invalid(flags), "any bit saying the number is NaN or may be wrong")
+        if "outside_calibration" not in described:
+            described["outside_calibration"] = (
+                is_outside_calibration(flags),
+                "any bit saying a GIQE is used outside its calibration")
     return xr.Dataset({name: value.assign_attrs(long_name=text, units="1")
                        for name, (value, text) in described.items()})
+
+
+def _flag_table(flags: xr.DataArray) -> tuple[list, list]:
+    """The (meanings, masks) a flag variable declares in its CF attributes, checked."""
+    if not isinstance(flags, xr.DataArray):
+        raise ValueError(f"flags must be an xarray DataArray; got {type(flags).__name__}")
+    attrs = flags.attrs
+    name = f"{flags.name!r}" if flags.name is not None else "the variable"
+    if "flag_masks" not in attrs or "flag_meanings" not in attrs:
+        raise ValueError(
+            f"{name} has no CF flag_masks and flag_meanings attributes, so nothing says what "
+            "its bits mean; pass a flag variable of an xbsm result (or of its NetCDF file), "
+            "or give bare integers the model's table first: "
+            "values.assign_attrs(xbsm.flags.flag_attrs())")
+    meanings = str(attrs["flag_meanings"]).split()
+    masks = [int(m) for m in np.atleast_1d(np.asarray(attrs["flag_masks"]))]
+    if len(meanings) != len(masks) or not meanings:
+        raise ValueError(f"{name} has {len(masks)} flag_masks but {len(meanings)} "
+                         "flag_meanings; CF pairs them one to one")
+    return meanings, masks

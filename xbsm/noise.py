@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+from types import MappingProxyType
+
 import numpy as np
 import xarray as xr
 
+from . import radiometry
 from ._kernels import apply_kernel, dataset
 from ._metadata import named
+from .constants import CODATA
 
 # NumPy kernels (plain arrays in and out, no checks); the public functions below wrap them
 # in one ``xr.apply_ufunc`` each, which broadcasts, aligns and carries dask. Like xarray's
@@ -255,3 +259,85 @@ def noise_terms(signal: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
         "other_noise": named(s["other_noise"], rms, "other noise"),
         "total_noise": named(apply_kernel(_chain_total_kernel, *chain), rms, "total noise"),
     })
+
+
+#: The sources of the sensor's own focal-plane irradiance (paper Eq. 2), their noise
+#: variables and long names: what :func:`self_emission_noise_terms` splits
+#: ``self_emission_noise`` into.
+SELF_EMISSION_SOURCES = MappingProxyType({
+    "cold_shield_noise": "cold-shield self-emission noise",
+    "optics_emission_noise": "optics self-emission noise",
+    "cold_filter_emission_noise": "cold-filter (cold stop) self-emission noise",
+    "stray_light_noise": "stray-light noise",
+})
+
+
+def _share_noise_kernel(total, *rates):
+    """Each rate's share of a Poisson noise: sqrt(rate / sum) x total (0 where nothing)."""
+    whole = sum(rates)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return tuple(np.where(whole > 0, total * np.sqrt(np.clip(rate, 0.0, None) / whole), 0.0)
+                     for rate in rates)
+
+
+def self_emission_noise_terms(self_emission_noise, sensor: xr.Dataset,
+                              wavelength: xr.DataArray, constants=CODATA) -> xr.Dataset:
+    r"""Self-emission and stray-light noise split by source.
+
+    The sources are the cold shield, the warm optics, the cold filter (cold
+    stop) and stray light (paper Eq. 2).
+
+    The sensor's own photoelectrons are Poisson: their variance is the sum of
+    each source's photoelectrons, so each source's noise is the total noise
+    times the square root of its share of the band-integrated photoelectron
+    rate. The four terms add in quadrature to ``self_emission_noise``.
+
+    Parameters
+    ----------
+    self_emission_noise : xr.DataArray
+        From :func:`xbsm.snr` (or :func:`noise_terms`). [count]
+    sensor : xr.Dataset
+        From :func:`xbsm.sensor`: temperatures, emissivities, cold-filter
+        transmission, stray irradiance, quantum efficiency, optics.
+    wavelength : xr.DataArray
+        The band's wavelengths (the ``wavelength`` coordinate of :func:`xbsm.snr`,
+        or any grid spanning the band). [m]
+    constants : Constants
+        Physical constants.
+
+    Returns
+    -------
+    xr.Dataset
+        ``cold_shield_noise``, ``optics_emission_noise``,
+        ``cold_filter_emission_noise``, ``stray_light_noise`` [count, rms electrons].
+
+    Notes
+    -----
+    .. math:: \sigma_i = \sigma_{\mathrm{self}}\sqrt{N_i / \textstyle\sum_j N_j},
+       \qquad N_i \propto \int \frac{\lambda}{hc}\,\eta(\lambda)\,E_i(\lambda)\,d\lambda
+
+    with :math:`E_i` the focal-plane irradiance of each source (paper Eq. 2).
+    """
+    s = sensor
+    lens = (s["aperture_diameter"], s["focal_length"])
+    irradiances = (
+        radiometry.cold_shield_self_emission(wavelength, s["cold_shield_temperature"], *lens,
+                                             constants),
+        radiometry.optics_self_emission(wavelength, s["optics_temperature"],
+                                        s["optics_emissivity"], s["cold_filter_transmission"],
+                                        *lens, constants),
+        radiometry.cold_stop_self_emission(wavelength, s["cold_filter_temperature"],
+                                           s["cold_filter_emissivity"], *lens, constants),
+        xr.zeros_like(wavelength, dtype=float) + radiometry.resample_spectral(
+            s["stray_irradiance"], wavelength, "stray_irradiance"),
+    )
+    qe = radiometry.resample_spectral(s["quantum_efficiency"], wavelength, "quantum_efficiency")
+    rates = [radiometry.band_integral(radiometry.photon_detection_rate(
+        irradiance.assign_coords(wavelength=wavelength), qe, s["detector_width_x"],
+        s["detector_width_y"], constants)) for irradiance in irradiances]
+    parts = xr.apply_ufunc(_share_noise_kernel, self_emission_noise, *rates,
+                           output_core_dims=[[]] * len(rates), dask="parallelized",
+                           output_dtypes=[float] * len(rates))
+    return dataset({name: named(part, "count", long_name)
+                    for (name, long_name), part in zip(SELF_EMISSION_SOURCES.items(), parts,
+                                                       strict=True)})

@@ -48,3 +48,7 @@ left.set_ylabel("NIIRS (GIQE 5)")
 left.set_title("GIQE 5 NIIRS, D = 0.275 m")
 xbsm.plot.range_performance(answer, x="aperture_diameter", hue="visibility", ax=right)
 print(answer.max_range.round(-2).to_pandas())
+# answers interpolated from a cell outside the GIQE calibration say so (goal_flags
+# outside_calibration; answer.flags holds those cells' own bits)
+extrapolated = xbsm.flags.decode(answer.goal_flags).outside_calibration
+print(f"{int(extrapolated.sum())} of {extrapolated.size} answers are extrapolated")

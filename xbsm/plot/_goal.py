@@ -52,7 +52,7 @@ def _answer(goal, x, hue) -> _Answer:
     if not isinstance(goal, xr.Dataset) or "goal_flags" not in goal:
         raise ValueError("goal must be the Dataset of xbsm.study.max_range or min_parameter "
                          f"(an answer variable and goal_flags); got {type(goal).__name__}")
-    names = [name for name in goal.data_vars if name != "goal_flags"]
+    names = [name for name in goal.data_vars if name not in ("goal_flags", "flags")]
     if len(names) != 1 or not (names[0] == "max_range" or names[0].startswith("min_")):
         raise ValueError("goal must hold one answer variable, max_range or min_<dim>, besides "
                          f"goal_flags; got {names}")

@@ -13,6 +13,7 @@ import numpy as np
 import xarray as xr
 
 from .. import flags
+from ..noise import SELF_EMISSION_SOURCES
 from ._style import _COLORS, MTF_COMPONENTS, NOISE_TERMS, _quantity, _units, _value_label, _words
 
 # ---- choosing one scenario -----------------------------------------------------------------
@@ -58,6 +59,13 @@ def _noise_panel(ax, ds: xr.Dataset, selector: dict) -> None:
     """Bars of the noise terms of one scenario, with its signal, contrast, well fill and SNR."""
     names = [name for name in NOISE_TERMS if name in ds and (
         name != "other_noise" or bool((ds[name] != 0).any()))]
+    split = [name for name in SELF_EMISSION_SOURCES if name in names]
+    contributing = [name for name in split if float(_at(ds, name, selector)) > 0]
+    if contributing:  # one bar per source that contributes instead of their sum
+        names = [n for n in names if n != "self_emission_noise" and (
+            n not in split or n in contributing)]
+    else:
+        names = [n for n in names if n not in split]
     values = np.array([float(_at(ds, name, selector)) for name in names])
     ax.set_xticks(range(len(names)), [NOISE_TERMS[n] for n in names], rotation=40, ha="right")
     ax.set_ylabel("noise [rms electrons]")

@@ -20,12 +20,20 @@ NOISE_TERMS = MappingProxyType({
     "scene_noise": "scene",
     "path_noise": "path",
     "self_emission_noise": "emission / stray",
+    "cold_shield_noise": "cold shield",
+    "optics_emission_noise": "optics emission",
+    "cold_filter_emission_noise": "cold filter emission",
+    "stray_light_noise": "stray light",
     "dark_current_noise": "dark current",
     "quantization_noise": "quantization",
     "read_noise": "readout",
     "other_noise": "other",
 })
-"""Noise variables of a result and their bar labels, in the order of the paper's Figure 4."""
+"""Noise variables of a result and their bar labels, in the order of the paper's Figure 4.
+
+The self-emission and stray-light noise is one bar, or, where a result carries its split
+(:func:`xbsm.noise.self_emission_noise_terms`) and some source is set, one bar per source
+that contributes."""
 
 MTF_COMPONENTS = ("aperture", "turbulence", "detector", "jitter", "drift", "wavefront",
                   "filter")

@@ -38,10 +38,12 @@ from ._style import (
     _Context,
     _context,
     _quantity,
+    _study_of,
     _suptitle,
     _value_label,
     _words,
 )
+from .axes import _with_self_emission_split
 
 
 def _bits(ds: xr.Dataset, like: xr.DataArray, names=None, group=None) -> xr.DataArray:
@@ -117,7 +119,9 @@ def _noise_figure(ds: xr.Dataset, ctx: _Context):
     fig = Figure(figsize=(1.0 + 4.6 * len(bands), 5.2), layout="constrained")
     axes = fig.subplots(1, len(bands), squeeze=False, sharey=True)[0]
     for ax, band in zip(axes, bands, strict=True):
-        _noise_panel(ax, ds, {**selector, **({"band": band} if band is not None else {})})
+        pick = {**selector, **({"band": band} if band is not None else {})}
+        point = _split_self_emission(ds.isel({d: i for d, i in pick.items() if d in ds.dims}))
+        _noise_panel(ax, point, {})
         if band is not None:
             ax.set_title(_value_label(ds, "band", band), fontsize="medium")
         if ax is not axes[0]:
@@ -127,6 +131,32 @@ def _noise_figure(ds: xr.Dataset, ctx: _Context):
                    f"{ctx.title}")
     yield "figure4_noise.png", fig
 
+
+
+def _split_self_emission(point: xr.Dataset) -> xr.Dataset:
+    """One scenario of a study result with its self-emission noise split by source.
+
+    The sensor is rebuilt from the result's study (``xbsm_study``) at this scenario
+    (its band and swept values); without a study that still parses, ``point`` as is.
+    """
+    study = _study_of(point)
+    if study is None or "self_emission_noise" not in point:
+        return point
+    from .. import params
+    from ..study.spec import SENSOR_PARAMETERS
+
+    values = {**study.sensor}
+    if "band" in point.coords and study.bands:
+        values.update(study.bands[str(point["band"].values)])
+    for sweep in study.sweeps:
+        for name in sweep.values:
+            if name in SENSOR_PARAMETERS and name in point.coords:
+                values[name] = float(point[name])
+    try:
+        sensor = params.sensor(**{k: v for k, v in values.items() if k in SENSOR_PARAMETERS})
+    except ValueError:
+        return point
+    return _with_self_emission_split(point, sensor)
 
 
 def _mtf_figure(ds: xr.Dataset, ctx: _Context):

@@ -16,12 +16,25 @@ from ..methods import method as make_method
 from ._source import Source, section, shown, suggestion, unknown_name
 from ._values import BAND_PARAMETERS, SENSOR_PARAMETERS, fixed_parameters, sweep_values
 
-__all__ = ["OUTPUT_GROUPS", "SCHEDULERS", "SENSOR_PRESETS", "method_and_knobs",
-           "outputs_and_frequency", "run_options", "sensor_and_bands"]
+__all__ = ["MTF_VARIABLES", "NIIRS_VARIABLES", "OUTPUT_GROUPS", "SCHEDULERS",
+           "SENSOR_PRESETS", "method_and_knobs", "output_variables", "outputs_and_frequency",
+           "run_options", "sensor_and_bands"]
 
 #: Built-in sensors a study may start from (``[sensor] preset``), with their bands.
 SENSOR_PRESETS = MappingProxyType({"olson": tuple(examples.OLSON_BANDS)})
 OUTPUT_GROUPS = ("niirs", "mtf")
+#: Variables of the ``niirs`` output group (what :func:`xbsm.niirs` returns), by name.
+NIIRS_VARIABLES = (
+    "niirs", "snr", "snr_frame", "effective_integration_time", "target_photoelectrons",
+    "background_photoelectrons", "contrast_photoelectrons", "well_fill", "shot_noise",
+    "scene_noise", "path_noise", "self_emission_noise", "dark_current_noise",
+    "quantization_noise", "read_noise", "other_noise", "total_noise", "rer_x", "rer_y",
+    "eho_x", "eho_y", "rer", "eho", "coherence_diameter", "cutoff_frequency", "rer_giqe5",
+    "gsd", "gsd_gp", "gsd_w", "noise_gain", "slant_range", "elevation_angle", "flags")
+#: Variables of the ``mtf`` output group (:func:`xbsm.system_otf`'s, prefixed ``mtf_``).
+MTF_VARIABLES = tuple(f"mtf_{name}" for name in (
+    "aperture", "turbulence", "detector", "jitter", "drift", "wavefront", "filter",
+    "system_unfiltered", "system", "coherence_diameter", "flags"))
 SCHEDULERS = ("threads", "synchronous", "local-cluster")
 
 
@@ -101,9 +114,33 @@ def method_and_knobs(src: Source, doc: dict) -> tuple[str, dict]:
     return preset, knobs
 
 
+def output_variables(src: Source, doc: dict, groups: tuple) -> tuple:
+    """The variables ``[outputs] variables`` keeps (empty: all), each checked by name.
+
+    The flag variable that describes a kept variable (``flags``, or ``mtf_flags`` for
+    an ``mtf_*`` one) is always kept with it.
+    """
+    table = section(src, doc, "outputs", ("include", "mtf_frequency", "variables"))
+    if "variables" not in table:
+        return ()
+    names = table["variables"]
+    if not isinstance(names, list) or not names or not all(isinstance(x, str) for x in names):
+        raise src.error("outputs", "variables", "must be a non-empty list of output variable "
+                        f"names, e.g. [\"niirs\", \"snr\"]; got {shown(names)}")
+    for name in names:
+        if name in MTF_VARIABLES and "mtf" not in groups:
+            raise src.error("outputs", "variables", f"{name!r} is an mtf output; add \"mtf\" "
+                            "to include (with mtf_frequency) or remove it")
+        if name not in NIIRS_VARIABLES and name not in MTF_VARIABLES:
+            raise src.error("outputs", "variables", f"unknown output variable {name!r}; "
+                            f"{suggestion(name, NIIRS_VARIABLES + MTF_VARIABLES)}")
+    flags = ["flags"] + (["mtf_flags"] if any(n in MTF_VARIABLES for n in names) else [])
+    return tuple(dict.fromkeys([*names, *flags]))
+
+
 def outputs_and_frequency(src: Source, doc: dict) -> tuple[tuple, np.ndarray | None]:
     """Output groups (``niirs`` always; ``mtf`` with its frequency grid)."""
-    table = section(src, doc, "outputs", ("include", "mtf_frequency"))
+    table = section(src, doc, "outputs", ("include", "mtf_frequency", "variables"))
     include = table.get("include", ["niirs"])
     if not isinstance(include, list) or not include or not all(
             isinstance(x, str) for x in include):
@@ -137,12 +174,17 @@ def _whole(src: Source, key: str, value, name: str | None = None) -> None:
 
 
 def run_options(src: Source, doc: dict, dims) -> dict:
-    """Chunking, scheduler, workers and the default output path."""
+    """Chunking, scheduler, workers, the default output path and the zlib level."""
     table = section(src, doc, "run", ("chunk_scenarios", "chunks", "scheduler", "workers",
-                                      "output"))
+                                      "output", "compress"))
     out = dict(chunk_scenarios=table.get("chunk_scenarios", 20_000),
                chunks=table.get("chunks", {}), scheduler=table.get("scheduler", "threads"),
-               workers=table.get("workers", 2), output=table.get("output"))
+               workers=table.get("workers", 2), output=table.get("output"),
+               compress=table.get("compress", 0))
+    compress = out["compress"]
+    if isinstance(compress, bool) or not isinstance(compress, int) or not 0 <= compress <= 9:
+        raise src.error("run", "compress", "must be a zlib level, a whole number from 0 (no "
+                        f"compression) to 9 (smallest file); got {shown(compress)}")
     for key in ("chunk_scenarios", "workers"):
         _whole(src, key, out[key])
     if not isinstance(out["chunks"], dict):

@@ -25,6 +25,7 @@ import xarray as xr
 
 from .. import __version__, model, params
 from ..methods import method as make_method
+from . import _cf
 from .spec import SCENARIO_PARAMETERS, SENSOR_PARAMETERS, Study
 
 
@@ -53,7 +54,7 @@ def _coords(study: Study) -> dict:
     """Coordinates of the study dimensions: the swept values (paired ones as extra coords)."""
     coords = {}
     if study.bands:
-        coords["band"] = ("band", list(study.bands), {})
+        coords["band"] = ("band", list(study.bands), {"long_name": "spectral band"})
         for name in ("wavelength_min", "wavelength_max"):
             values = [band.get(name, study.sensor.get(name)) for band in study.bands.values()]
             coords[name] = ("band", np.asarray(values, dtype=float),
@@ -177,9 +178,17 @@ def run(study: Study) -> xr.Dataset:
     Returns
     -------
     xr.Dataset
-        Every requested output over ``band`` (if the study has bands) and the
-        swept dimensions, dask-backed with the study's chunks; global
-        attributes record the study text, the method and the xbsm version.
+        Every requested output (only those ``[outputs] variables`` names, and
+        their flag variables, if it is given) over ``band`` (if the study has
+        bands) and the swept dimensions, dask-backed with the study's chunks;
+        global attributes record the study text, the method and the xbsm
+        version. CF details: each data variable names its flag variable in
+        ``ancillary_variables``, the flag variables say in ``comment`` which
+        bits apply to which variables; each variable's ``.encoding`` says how
+        to write it (no ``_FillValue`` on coordinates; zlib at ``[run]
+        compress`` on the data variables), which :func:`xbsm.study.write`
+        honours (``xbsm.study._cf.cf_encoding`` gives the same as a
+        ``to_netcdf(encoding=...)`` mapping).
 
     Notes
     -----
@@ -191,6 +200,8 @@ def run(study: Study) -> xr.Dataset:
     chunks = chunk_sizes(study)
     coords = _coords(study)
     sample, layout = _template(study, coords)
+    if study.variables:  # [outputs] variables: only these are kept, computed chunk by chunk
+        layout = {name: dims for name, dims in layout.items() if name in study.variables}
     positions = [dsa.arange(size, chunks=chunks[dim]) for dim, size in study.sizes.items()]
     letters = string.ascii_lowercase[:len(positions)]
     cells = dsa.blockwise(
@@ -201,10 +212,11 @@ def run(study: Study) -> xr.Dataset:
     variables = {name: xr.Variable(dims, _variable(cells, name, dims, sample[name], study,
                                                    chunks), sample[name].attrs)
                  for name, dims in layout.items()}
-    extra = {name: sample[name].variable for name in sample.coords
-             if name not in study.sizes and name in sample.dims}
+    extra = {name: sample[name].variable for name in sample.coords if name not in study.sizes
+             and any(name in dims for dims in layout.values())}
     result = xr.Dataset(variables, coords={**coords, **extra})
-    return result.assign_attrs(_provenance(study))
+    result = _cf.cf_attributes(result.assign_attrs(_provenance(study)))
+    return _cf.set_encoding(result, study.compress)
 
 
 def _provenance(study: Study) -> dict:
@@ -213,6 +225,7 @@ def _provenance(study: Study) -> dict:
         "title": study.title or "xbsm study",
         "Conventions": "CF-1.8",
         "source": f"xbsm {__version__}",
+        "history": f"xbsm {__version__}: xbsm.study.run of the study file in xbsm_study",
         "xbsm_method": method.describe(),
         **{f"xbsm_knob_{field.name}": str(getattr(getattr(method, field.name), "name",
                                                    getattr(method, field.name)))

@@ -23,11 +23,23 @@ from scipy.special import ndtr
 
 from .. import flags as fl
 
-#: Flags of a crossing: why the answer is a bound or missing.
+#: Flags of a crossing: why the answer is a bound, missing or extrapolated.
 GOAL_FLAGS = MappingProxyType({
     "never_meets": 1,         # the requirement is not met anywhere on the grid: NaN
     "bound_at_grid_edge": 2,  # met at the grid's first (or up to its last) value: a bound
     "invalid_cell": 4,        # an invalid model cell (flags) ended the search: conservative
+    "outside_calibration": 8,  # the answer lands on a cell outside the GIQE calibration
+})
+
+#: What each bit of :data:`GOAL_FLAGS` means (the ``goal_flags`` variable's ``flag_descriptions``).
+GOAL_FLAG_DESCRIPTIONS = MappingProxyType({
+    "never_meets": "the requirement is not met anywhere on the grid; the answer is NaN",
+    "bound_at_grid_edge": "the requirement is met at the grid's first value (min_*) or up to "
+                          "its last (max_range): the answer is only a bound",
+    "invalid_cell": "an invalid model cell ended the search: the answer is conservative",
+    "outside_calibration": "a model cell the answer is interpolated from is outside the GIQE "
+                           "calibration or the NIIRS scale (its flags have a calibration bit): "
+                           "the answer is extrapolated",
 })
 
 #: GIQE 5 standard error of prediction [NIIRS]: 0.35 on the 47-image validation set,
@@ -37,8 +49,9 @@ GOAL_FLAGS = MappingProxyType({
 GIQE5_STANDARD_ERROR = 0.35
 
 
-def _crossing_kernel(values, meets, invalid, *, coordinate, first_meeting):
-    """Crossing along the last axis: (answer, flags) for every other index."""
+def _crossing_kernel(values, meets, invalid, cells, *, coordinate, first_meeting,
+                     calibration):
+    """Crossing along the last axis: (answer, goal flags, landing cells' flags) elsewhere."""
     ok = meets & ~invalid
     if first_meeting:  # smallest coordinate at which the requirement is first met
         index = np.where(ok.any(-1), ok.argmax(-1), -1)
@@ -50,15 +63,25 @@ def _crossing_kernel(values, meets, invalid, *, coordinate, first_meeting):
         at_end = first_fail == ok.shape[-1]
     flags = np.where(index < 0, GOAL_FLAGS["never_meets"], 0)
     flags |= np.where(at_end & (index >= 0), GOAL_FLAGS["bound_at_grid_edge"], 0)
-    answer = _interpolate(values, coordinate, index, first_meeting, at_end)
+    answer, inner, other, used = _interpolate(values, coordinate, index, first_meeting, at_end)
     neighbour = np.clip(index + (1 if not first_meeting else -1), 0, ok.shape[-1] - 1)
     hit_invalid = np.take_along_axis(invalid, neighbour[..., None], -1)[..., 0]
     flags |= np.where(hit_invalid & ~at_end & (index >= 0), GOAL_FLAGS["invalid_cell"], 0)
-    return answer, flags.astype(np.int32)
+    # the model flags of the cells the answer comes from: the grid value that meets the
+    # requirement, and its neighbour when the answer is interpolated towards it
+    landing = np.take_along_axis(cells, inner[..., None], -1)[..., 0]
+    landing = landing | np.where(used, np.take_along_axis(cells, other[..., None], -1)[..., 0], 0)
+    landing = np.where(index < 0, 0, landing)
+    flags |= np.where((landing & calibration) != 0, GOAL_FLAGS["outside_calibration"], 0)
+    return answer, flags.astype(np.int32), landing.astype(np.int32)
 
 
 def _interpolate(values, coordinate, index, first_meeting, at_end):
-    """Linear interpolation of the coordinate at the threshold (values already shifted)."""
+    """Linear interpolation of the coordinate at the threshold (values already shifted).
+
+    Returns the answer, the indices of the two grid values around it and where the
+    second one enters the answer.
+    """
     n = values.shape[-1]
     inner = np.clip(index, 0, n - 1)
     other = np.clip(inner + (-1 if first_meeting else 1), 0, n - 1)
@@ -67,9 +90,11 @@ def _interpolate(values, coordinate, index, first_meeting, at_end):
     c0, c1 = coordinate[inner], coordinate[other]
     with np.errstate(invalid="ignore", divide="ignore"):
         t = np.where(np.isfinite(v1) & (v0 != v1), v0 / (v0 - v1), 0.0)
-    answer = c0 + np.clip(t, 0.0, 1.0) * (c1 - c0)
+    t = np.clip(t, 0.0, 1.0)
+    used = ~(at_end | ~np.isfinite(v1)) & (t > 0) & (index >= 0)
+    answer = c0 + t * (c1 - c0)
     answer = np.where(at_end | ~np.isfinite(v1), c0, answer)
-    return np.where(index < 0, np.nan, answer)
+    return np.where(index < 0, np.nan, answer), inner, other, used
 
 
 def _crossing(quantity, threshold, dim, flags, first_meeting, name, long_name):
@@ -79,25 +104,40 @@ def _crossing(quantity, threshold, dim, flags, first_meeting, name, long_name):
     if quantity.sizes[dim] < 2 or not np.all(np.diff(coordinate) > 0):
         raise ValueError(f"dim {dim!r} must have at least 2 increasing coordinate values")
     threshold = xr.DataArray(threshold) if not isinstance(threshold, xr.DataArray) else threshold
-    invalid = (fl.is_invalid(flags) if flags is not None
-               else xr.zeros_like(quantity, dtype=bool)) | quantity.isnull()
-    shifted, invalid = xr.broadcast(quantity - threshold, invalid)
+    cells = (flags if flags is not None else xr.zeros_like(quantity, dtype=np.int32))
+    cells = cells.astype(np.int32)
+    invalid = fl.is_invalid(cells) | quantity.isnull()
+    shifted, invalid, cells = xr.broadcast(quantity - threshold, invalid, cells)
     shifted = shifted.where(~invalid, -np.inf)
-    if shifted.chunks is not None:
-        shifted, invalid = shifted.chunk({dim: -1}), invalid.chunk({dim: -1})
-    answer, goal_flags = xr.apply_ufunc(
-        _crossing_kernel, shifted, shifted >= 0, invalid,
-        kwargs={"coordinate": coordinate, "first_meeting": first_meeting},
-        input_core_dims=[[dim], [dim], [dim]],
-        output_core_dims=[[], []], dask="parallelized", output_dtypes=[float, np.int32])
+    if shifted.chunks is not None or cells.chunks is not None:
+        shifted, invalid, cells = (a.chunk({dim: -1}) for a in (shifted, invalid, cells))
+    answer, goal_flags, landing = xr.apply_ufunc(
+        _crossing_kernel, shifted, shifted >= 0, invalid, cells,
+        kwargs={"coordinate": coordinate, "first_meeting": first_meeting,
+                "calibration": fl.CALIBRATION_MASK},
+        input_core_dims=[[dim], [dim], [dim], [dim]],
+        output_core_dims=[[], [], []], dask="parallelized",
+        output_dtypes=[float, np.int32, np.int32])
     units = quantity[dim].attrs.get("units", "")
-    return xr.Dataset({
-        name: answer.assign_attrs(units=units, long_name=long_name),
+    out = {
+        name: answer.assign_attrs(units=units, long_name=long_name,
+                                  ancillary_variables="goal_flags flags"
+                                  if flags is not None else "goal_flags"),
         "goal_flags": goal_flags.assign_attrs(
-            long_name="why the answer is a bound or missing",
+            long_name="why the answer is a bound, missing or extrapolated", units="1",
             flag_masks=np.array(list(GOAL_FLAGS.values()), dtype=np.int32),
-            flag_meanings=" ".join(GOAL_FLAGS)),
-    }, attrs={"threshold": str(threshold.values) if threshold.size == 1 else "array"})
+            flag_meanings=" ".join(GOAL_FLAGS),
+            flag_descriptions="; ".join(f"{k}: {v}" for k, v in
+                                        GOAL_FLAG_DESCRIPTIONS.items())),
+    }
+    if flags is not None:
+        attrs = {**fl.flag_attrs(), **{k: v for k, v in flags.attrs.items()
+                                       if k in ("flag_masks", "flag_meanings")}}
+        out["flags"] = landing.assign_attrs(
+            attrs, long_name=f"model flags of the cells the answer is interpolated from "
+                             f"(OR of the {dim} values around the crossing)")
+    return xr.Dataset(out, attrs={"threshold": str(threshold.values) if threshold.size == 1
+                                  else "array"})
 
 
 def max_range(niirs: xr.DataArray, threshold, dim: str = "ground_range",
@@ -119,13 +159,18 @@ def max_range(niirs: xr.DataArray, threshold, dim: str = "ground_range",
         The range dimension (increasing coordinate).
     flags : xr.DataArray, optional
         The model's ``flags``: cells :func:`xbsm.flags.is_invalid` marks end
-        the search (conservatively) and set ``invalid_cell``.
+        the search (conservatively) and set ``invalid_cell``; a calibration
+        bit on a cell the answer comes from sets ``outside_calibration``.
+        Without it nothing says whether the answer is extrapolated: pass it.
 
     Returns
     -------
     xr.Dataset
-        ``max_range`` (units of ``dim``; NaN where never met) and
-        ``goal_flags`` (``never_meets``, ``bound_at_grid_edge``, ``invalid_cell``).
+        ``max_range`` (units of ``dim``; NaN where never met), ``goal_flags``
+        (``never_meets``, ``bound_at_grid_edge``, ``invalid_cell``,
+        ``outside_calibration``) and, with ``flags``, ``flags``: the model
+        flags of the one or two grid cells the answer is interpolated from
+        (decode with :func:`xbsm.flags.decode`).
     """
     return _crossing(niirs, threshold, dim, flags, False, "max_range",
                      f"longest {dim} meeting the requirement")
@@ -149,12 +194,16 @@ def min_parameter(niirs: xr.DataArray, threshold, dim: str,
     dim : str
         The parameter's dimension (increasing coordinate).
     flags : xr.DataArray, optional
-        The model's ``flags``; invalid cells never count as meeting.
+        The model's ``flags``; invalid cells never count as meeting, and a
+        calibration bit on a cell the answer comes from sets
+        ``outside_calibration``. Without it nothing says whether the answer is
+        extrapolated: pass it.
 
     Returns
     -------
     xr.Dataset
-        ``min_<dim>`` (units of ``dim``; NaN where never met) and ``goal_flags``.
+        ``min_<dim>`` (units of ``dim``; NaN where never met), ``goal_flags``
+        and, with ``flags``, ``flags`` (as :func:`max_range`).
     """
     return _crossing(niirs, threshold, dim, flags, True, f"min_{dim}",
                      f"smallest {dim} meeting the requirement")
@@ -180,11 +229,12 @@ def probability_meets(niirs: xr.DataArray, threshold,
     Returns
     -------
     xr.DataArray
-        In [0, 1]. [1]
+        ``probability_meets``, in [0, 1]. [1]
     """
     if not (np.isfinite(standard_error) and standard_error > 0):
         raise ValueError(f"standard_error must lie in (0, inf) NIIRS; got {standard_error!r}")
     z = (niirs - threshold) / standard_error
-    return xr.apply_ufunc(ndtr, z, dask="parallelized", output_dtypes=[float]).assign_attrs(
+    p = xr.apply_ufunc(ndtr, z, dask="parallelized", output_dtypes=[float])
+    return p.rename("probability_meets").assign_attrs(
         units="1", long_name="probability that NIIRS meets the requirement",
         standard_error=standard_error)

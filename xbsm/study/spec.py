@@ -33,10 +33,13 @@ from ._checks import (
     dimension_sizes,
 )
 from ._sections import (
+    MTF_VARIABLES,
+    NIIRS_VARIABLES,
     OUTPUT_GROUPS,
     SCHEDULERS,
     SENSOR_PRESETS,
     method_and_knobs,
+    output_variables,
     outputs_and_frequency,
     run_options,
     sensor_and_bands,
@@ -62,9 +65,9 @@ from ._values import (
 )
 
 __all__ = ["BAND_PARAMETERS", "MAX_SCENARIOS", "MAX_STUDY_BYTES", "MAX_SWEEP_VALUES",
-           "OUTPUT_GROUPS", "PARAMETERS", "RANGE_KEYS", "RESERVED_DIMS", "SCENARIO_PARAMETERS",
-           "SCHEDULERS", "SENSOR_PARAMETERS", "SENSOR_PRESETS", "TOP_KEYS", "Study",
-           "StudyError", "Sweep", "load", "parse"]
+           "MTF_VARIABLES", "NIIRS_VARIABLES", "OUTPUT_GROUPS", "PARAMETERS", "RANGE_KEYS",
+           "RESERVED_DIMS", "SCENARIO_PARAMETERS", "SCHEDULERS", "SENSOR_PARAMETERS",
+           "SENSOR_PRESETS", "TOP_KEYS", "Study", "StudyError", "Sweep", "load", "parse"]
 
 #: The largest study file read (a guard against passing a data file by mistake). [bytes]
 MAX_STUDY_BYTES = 10 * 2**20
@@ -87,9 +90,14 @@ class Sweep:
         return len(next(iter(self.values.values())))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Study:
-    """A parsed, checked study: everything :func:`xbsm.study.run` needs."""
+    """A parsed, checked study: everything :func:`xbsm.study.run` needs.
+
+    ``print(study)`` (and its repr in a notebook) is a summary: the scenarios
+    and their dimensions, the chunks, the sweeps, bands, method, outputs and
+    run options; the parameters themselves are the attributes.
+    """
 
     sensor: MappingProxyType
     bands: MappingProxyType  # band name -> sensor parameters of that band (may be empty)
@@ -106,6 +114,8 @@ class Study:
     output: str | None
     title: str
     text: str = dataclasses.field(repr=False, default="")
+    variables: tuple = ()  # the output variables kept ([outputs] variables); empty: all
+    compress: int = 0  # zlib level of the data variables in the NetCDF file; 0: none
 
     @property
     def sizes(self) -> dict:
@@ -116,6 +126,53 @@ class Study:
     def scenarios(self) -> int:
         """Number of scenarios: the product of every dimension's length."""
         return math.prod(self.sizes.values())
+
+    def __repr__(self) -> str:
+        return "\n".join(_summary(self))
+
+
+def _values_text(name: str, values) -> str:
+    """A swept parameter's values in a few words: a short list, or count and span."""
+    spec = params.SENSOR_SPECS.get(name) or params.SCENARIO_SPECS.get(name)
+    units = f" {spec.units}" if spec is not None and spec.units not in ("", "1") else ""
+    values = np.asarray(values, dtype=float)
+    if len(values) <= 4:
+        return f"{name} [{', '.join(f'{v:g}' for v in values)}]{units}"
+    return f"{name} {len(values)} values {values.min():g} to {values.max():g}{units}"
+
+
+def _summary(study: Study) -> list:
+    """The lines of ``print(study)``."""
+    from .build import chunk_sizes  # build imports this module
+
+    sizes, chunks = study.sizes, chunk_sizes(study)
+    dims = " x ".join(f"{dim} {size}" for dim, size in sizes.items()) or "one scenario"
+    per_chunk = math.prod(chunks.values())
+    count = math.prod(math.ceil(sizes[d] / chunks[d]) for d in sizes)
+    lines = [f"<xbsm Study {study.title!r}>" if study.title else "<xbsm Study>",
+             f"  scenarios: {study.scenarios:,} ({dims})",
+             f"  chunks:    {count:,} of at most {per_chunk:,} scenarios"
+             + (" (" + ", ".join(f"{dim} {n}" for dim, n in chunks.items()) + ")"
+                if chunks else "")]
+    sweeps = []
+    for sweep in study.sweeps:
+        texts = [_values_text(name, values) for name, values in sweep.values.items()]
+        sweeps.append(texts[0] if list(sweep.values) == [sweep.dim]
+                      else f"{sweep.dim}: " + "; ".join(texts))
+    lines.append("  sweeps:    " + ("; ".join(sweeps) if sweeps else "none"))
+    if study.bands:
+        lines.append(f"  bands:     {', '.join(study.bands)}")
+    knobs = ", ".join(f"{k}={v!r}" for k, v in study.knobs.items())
+    lines.append(f"  method:    {study.method}" + (f" ({knobs})" if knobs else ""))
+    outputs = ", ".join(study.outputs)
+    if study.mtf_frequency is not None:
+        outputs += f" ({len(study.mtf_frequency)} MTF frequencies)"
+    lines.append(f"  outputs:   {outputs}; variables: "
+                 + (", ".join(study.variables) if study.variables else "all"))
+    lines.append(f"  run:       {study.scheduler}, {study.workers} worker(s)"
+                 + (f", output {study.output}" if study.output else "")
+                 + (f", zlib level {study.compress}" if study.compress else ""))
+    return lines
 
 
 def _sweeps(src: Source, doc: dict) -> tuple:
@@ -203,11 +260,13 @@ def parse(text: str, name: str = "<study>") -> Study:
     check_size(src, bands, sweeps)
     method, knobs = method_and_knobs(src, doc)
     outputs, frequency = outputs_and_frequency(src, doc)
+    variables = output_variables(src, doc, outputs)
     dims = list(dimension_sizes(bands, sweeps))
     study = Study(sensor=MappingProxyType(sensor), bands=MappingProxyType(bands),
                   scenario=MappingProxyType(scenario), sweeps=sweeps, method=method,
                   knobs=MappingProxyType(knobs), outputs=outputs, mtf_frequency=frequency,
-                  title=doc.get("title", ""), text=text, **run_options(src, doc, dims))
+                  title=doc.get("title", ""), text=text, variables=variables,
+                  **run_options(src, doc, dims))
     check_model_inputs(src, study)
     return study
 

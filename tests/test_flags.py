@@ -1,0 +1,68 @@
+"""xbsm.flags: decoding reads each flag variable's own CF table."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import xbsm
+from xbsm import flags, study
+
+
+def _rising():
+    # NIIRS 4, 6, 8 over three apertures: 5 is met between the first and the second
+    d = np.array([0.1, 0.2, 0.3])
+    return xr.DataArray([4.0, 6.0, 8.0], dims="aperture_diameter",
+                        coords={"aperture_diameter": ("aperture_diameter", d, {"units": "m"})})
+
+
+def test_decode_reads_goal_flags_by_their_own_meanings():
+    # NIIRS 6 is met at the first aperture already: bound_at_grid_edge, value 2
+    # (xbsm.study.goals.GOAL_FLAGS); the model's bit 2 is atmosphere_sparse (xbsm.flags.FLAGS),
+    # which a decoder that ignores the variable's attributes reports instead
+    goal = study.min_parameter(_rising(), 3.0, "aperture_diameter")
+    assert int(goal.goal_flags) == 2
+    bits = flags.decode(goal.goal_flags)
+    assert bool(bits.bound_at_grid_edge)
+    assert not bool(bits.never_meets) and not bool(bits.invalid_cell)
+    assert "atmosphere_sparse" not in bits
+
+
+def test_decode_reads_goal_flags_written_to_netcdf(tmp_path):
+    # the attributes survive a NetCDF round trip (flag_masks comes back as an array)
+    goal = study.max_range(_rising().rename(aperture_diameter="ground_range"), 9.0,
+                           dim="ground_range")
+    goal.to_netcdf(tmp_path / "goal.nc")
+    with xr.open_dataset(tmp_path / "goal.nc") as back:
+        bits = flags.decode(back.goal_flags)
+        # 9 is never met on the grid: never_meets, value 1 (GOAL_FLAGS)
+        assert bool(bits.never_meets) and not bool(bits.bound_at_grid_edge)
+
+
+def test_decode_refuses_a_variable_without_a_flag_table():
+    with pytest.raises(ValueError, match="flag_masks and flag_meanings"):
+        flags.decode(xr.DataArray([0, 2], dims="case"))
+
+
+def test_decode_refuses_unpaired_masks_and_meanings():
+    bad = xr.DataArray([1]).assign_attrs(flag_masks=np.array([1, 2]), flag_meanings="one")
+    with pytest.raises(ValueError, match="one to one"):
+        flags.decode(bad)
+
+
+def test_decode_of_the_model_flags_keeps_the_groups():
+    # 4 | 512: well_fill_limited (a notice) and snr_nonpositive (invalid) (xbsm.flags.FLAGS)
+    raw = xr.DataArray([0, 4 | 512], dims="case").assign_attrs(flags.flag_attrs())
+    bits = flags.decode(raw)
+    assert bits.well_fill_limited.values.tolist() == [False, True]
+    assert bits.invalid.values.tolist() == [False, True]
+    assert bits.outside_calibration.values.tolist() == [False, False]
+    assert set(flags.FLAGS) <= set(bits.data_vars)
+
+
+def test_decode_of_every_flag_variable_of_a_niirs_result():
+    n = xbsm.niirs(xbsm.examples.olson_sensor(), xbsm.examples.olson_scenario())
+    for name in [v for v in n.data_vars if v == "flags" or v.endswith("_flags")]:
+        bits = flags.decode(n[name])
+        assert set(bits.data_vars) >= set(n[name].attrs["flag_meanings"].split())
