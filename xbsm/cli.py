@@ -19,7 +19,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .interrupts import Interrupted, handling_signals, stop_if_interrupted
+from .interrupts import Interrupted, deferred, handling_signals, stop_if_interrupted
 
 #: The study ``xbsm run`` runs without a study file: the paper's Example 1 (Sec. 3).
 DEFAULT_STUDY = "example1.toml"
@@ -115,7 +115,8 @@ def _draw_or_warn(result_file: Path, directory: Path) -> list[Path]:
     from .study import StudyError
 
     try:
-        return draw(result_file, directory)
+        with deferred():  # a signal waits for the figure being drawn (never inside matplotlib)
+            return draw(result_file, directory)
     except Interrupted:
         print(f"xbsm run: {result_file} is complete; the figures were interrupted: draw them "
               f"with `xbsm plot {result_file}`", file=sys.stderr)

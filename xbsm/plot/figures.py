@@ -18,6 +18,7 @@ import numpy as np
 import xarray as xr
 
 from .. import __version__, flags
+from ..interrupts import stop_if_interrupted
 from ._layout import _against, _Curves, _layout
 from ._panels import (
     _at,
@@ -235,6 +236,7 @@ def _save(fig, path: Path) -> Path:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+    stop_if_interrupted()  # a signal deferred while matplotlib drew stops the run here
     return path
 
 
@@ -268,7 +270,9 @@ def standard_figures(ds: xr.Dataset, directory) -> list[Path]:
     Notes
     -----
     Each file is written under a temporary name in ``directory`` and renamed into
-    place when complete, so an interrupted call never leaves a truncated PNG.
+    place when complete, so an interrupted call never leaves a truncated PNG; a
+    signal recorded while a figure was drawn (:mod:`xbsm.interrupts`) stops the
+    call after that figure.
     """
     if not isinstance(ds, xr.Dataset):
         raise ValueError(f"ds must be an xarray Dataset (a study result); got {type(ds).__name__}")
