@@ -2,7 +2,8 @@
 
 The same 10^6-scenario study (ground range x altitude x focal length x visibility x
 drift rate, recipes/studies/million.toml) cut into 250, 1,000, 10,000 and 100,000
-chunks by ``[run] chunks``. For each, ``xbsm run`` starts in a child process from
+chunks by ``[run] chunks``, and (``--chunks 937500``) the same study stretched to
+the 10^10 scenarios a study file may hold, at the default chunking. For each, ``xbsm run`` starts in a child process from
 a given checkout (``PYTHONPATH``), and the recipe records the wall time from the
 start until the first chunk file appears in ``OUT.nc.parts/`` and the child's peak
 resident memory until then (``VmHWM`` of ``/proc/PID/status``, Linux), then stops
@@ -44,6 +45,15 @@ LAYOUTS = {
     10_000: {"ground_range": 1, "visibility": 1, "drift_rate_x": 1},
     100_000: {"ground_range": 1, "altitude": 1, "visibility": 1, "drift_rate_x": 1},
 }
+#: the largest study a study file may describe (10^10 scenarios: the drift axis 10^4 times
+#: longer), at the default chunking (at most 20,000 scenarios a chunk): 937,500 chunks
+LARGEST = 937_500
+
+
+def largest_text() -> str:
+    """The million study stretched to the 10^10-scenario limit, default chunking."""
+    text = STUDY.read_text().split("[run]")[0]
+    return text.replace("num = 50 }", "num = 500000 }")
 
 
 def study_text(chunks: dict) -> str:
@@ -65,7 +75,8 @@ def first_chunk(checkout: Path, chunk_count: int, timeout: float) -> dict:
     """Start ``xbsm run`` from ``checkout``; time and memory until its first chunk file."""
     with tempfile.TemporaryDirectory() as tmp:
         study = Path(tmp) / "study.toml"
-        study.write_text(study_text(LAYOUTS[chunk_count]))
+        study.write_text(largest_text() if chunk_count == LARGEST
+                         else study_text(LAYOUTS[chunk_count]))
         out = Path(tmp) / "out.nc"
         env = {**os.environ, "PYTHONPATH": str(checkout.resolve())}
         start = time.perf_counter()
@@ -101,7 +112,7 @@ def main():
     parser.add_argument("--checkout", type=Path, action="append",
                         help="a checkout to measure (repeatable; default: this one)")
     parser.add_argument("--chunks", type=int, nargs="+", default=sorted(LAYOUTS),
-                        choices=sorted(LAYOUTS))
+                        choices=[*sorted(LAYOUTS), LARGEST])
     parser.add_argument("--timeout", type=float, default=300.0,
                         help="seconds to wait for the first chunk file")
     parser.add_argument("--out", type=Path,
