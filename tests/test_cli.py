@@ -178,3 +178,16 @@ def test_a_signalled_run_exits_with_its_code_and_resumes(tmp_path, signum, code)
     with xr.open_dataset(out) as a, xr.open_dataset(reference) as b:
         for name in b.data_vars:
             np.testing.assert_array_equal(a[name].values, b[name].values)
+
+
+def test_progress_off_a_terminal_is_a_line_per_ten_percent(tmp_path):
+    # issue 21: a run whose standard error was a file wrote 94 KB of carriage-return updates
+    study = _study(tmp_path, FORTY_EIGHT_CHUNKS)
+    done = subprocess.run([sys.executable, "-m", "xbsm.cli", "run", str(study), "-o",
+                           str(tmp_path / "out.nc"), "--no-figures"], capture_output=True,
+                          text=True, timeout=300, check=True)
+    lines = done.stderr.splitlines()
+    assert "\r" not in done.stderr
+    # one line of what is done, then at most 10 per phase (computing, writing the file)
+    assert len(lines) <= 21 and sum("chunks computed" in line for line in lines) <= 10
+    assert lines[-1].endswith(")") and "100 %" in lines[-1]
