@@ -130,19 +130,20 @@ def _save_chunk(file: Path, names: tuple, print_: dict, on_saved, blocks: list) 
     stop_if_interrupted()
 
 
-def _batch_graph(result, grid, graph, batch, parts, print_, on_saved):
-    """The tasks that compute and save the chunks of ``batch``: a graph culled once."""
-    owned = {index: [name for name, var in result.data_vars.items() if grid.owns(index, var.dims)]
-             for index in batch}
-    wanted = {index: [(result[name].data.name, *grid.block(index, result[name].dims))
-                      for name in names] for index, names in owned.items()}
-    dsk = dict(graph.cull({key for keys in wanted.values() for key in keys}))
+def _batch_graph(variables, grid, graph, batch, parts, print_, on_saved):
+    """The tasks that compute and save the chunks of ``batch``: a graph culled once.
+
+    ``variables`` is ``(name, dask key prefix, dims)`` of every data variable.
+    """
+    owned = {index: [(name, (key, *grid.block(index, dims))) for name, key, dims in variables
+                     if grid.owns(index, dims)] for index in batch}
+    dsk = dict(graph.cull({key for pairs in owned.values() for _, key in pairs}))
     saves = []
-    for index, names in owned.items():
-        key = ("xbsm-save-chunk", *index)
-        dsk[key] = (functools.partial(_save_chunk, _parts.block_file(parts, index), tuple(names),
-                                      print_, on_saved), wanted[index])
-        saves.append(key)
+    for index, pairs in owned.items():
+        task = functools.partial(_save_chunk, _parts.block_file(parts, index),
+                                 tuple(name for name, _ in pairs), print_, on_saved)
+        dsk[("xbsm-save-chunk", *index)] = (task, [key for _, key in pairs])
+        saves.append(("xbsm-save-chunk", *index))
     return dsk, saves
 
 
@@ -154,10 +155,11 @@ def _batches(items: list, size: int):
 def _compute_missing(result, grid, parts, print_, missing, scheduler, workers, progress):
     """Compute and save the chunks in ``missing``, batch after batch."""
     graph = HighLevelGraph.merge(*(var.data.__dask_graph__() for var in result.data_vars.values()))
+    variables = [(name, var.data.name, var.dims) for name, var in result.data_vars.items()]
     with _runner(scheduler, workers) as run_graph:
         local = scheduler in ("threads", "synchronous")
         for batch in _batches(missing, max(1, workers) * _BATCH_PER_WORKER):
-            dsk, keys = _batch_graph(result, grid, graph, batch, parts, print_,
+            dsk, keys = _batch_graph(variables, grid, graph, batch, parts, print_,
                                      progress.add if local else None)
             run_graph(dsk, keys)
             if not local:
@@ -228,6 +230,7 @@ def _define(nc, result: xr.Dataset) -> None:
 
 def _stream(result, grid, parts, print_, partial: Path, progress) -> None:
     """Write every chunk file's blocks into ``partial`` (created by the skeleton)."""
+    dims = {name: var.dims for name, var in result.data_vars.items()}
     with netCDF4.Dataset(partial, "a") as nc:
         _define(nc, result)
         for index in grid.indices():
@@ -239,7 +242,7 @@ def _stream(result, grid, parts, print_, partial: Path, progress) -> None:
                 raise StudyError(f"chunk file {file} was damaged after it was saved; it has "
                                  "been removed: run the same command again to compute it")
             for name, block in arrays.items():
-                nc[name][grid.region(index, result[name].dims)] = block
+                nc[name][grid.region(index, dims[name])] = block
             progress.add()
 
 
