@@ -15,6 +15,7 @@ name is always complete and holds only this run's numbers.
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import functools
 import itertools
@@ -41,6 +42,8 @@ __all__ = ["atmosphere_checksum", "check_output", "dependency_versions", "netcdf
 
 #: Chunks computed per batch and worker: each batch's graph is culled once.
 _BATCH_PER_WORKER = 16
+#: How long a new LocalCluster's workers may take to start.
+_WORKER_START_SECONDS = 120
 
 
 def netcdf_ready(ds: xr.Dataset) -> xr.Dataset:
@@ -192,7 +195,15 @@ def _distributed_client(scheduler: str, workers: int):
             # dashboard on a free port: a busy 8787 makes distributed retry and leak a socket
             cluster = stack.enter_context(LocalCluster(n_workers=workers, threads_per_worker=1,
                                                        dashboard_address=":0"))
-            yield stack.enter_context(Client(cluster))
+            client = stack.enter_context(Client(cluster))
+            try:  # a cluster whose workers never came up would wait for them forever
+                client.wait_for_workers(workers, timeout=_WORKER_START_SECONDS)
+            except (TimeoutError, asyncio.TimeoutError):  # the same class from Python 3.11
+                raise StudyError(f"the LocalCluster's {workers} worker(s) did not start within "
+                                 f"{_WORKER_START_SECONDS} s (an overloaded machine?); "
+                                 "finished chunks are kept, run the same command again, or "
+                                 "use --scheduler threads") from None
+            yield client
         else:
             yield stack.enter_context(Client(scheduler))
 
