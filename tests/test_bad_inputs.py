@@ -88,6 +88,17 @@ def _edited(**changes):
     return lambda: xbsm.snr(S.assign(**changes), SC)
 
 
+# a reference image for xbsm.simulate_image: a bright square on a gradient, 4 reference
+# pixels per camera pixel (the camera's GSD is 8 um / 4 m x 21.9 km = 4.4 cm)
+IMAGE = np.add.outer(np.arange(48.0), np.arange(48.0))
+IMAGE[16:32, 16:32] = 200.0
+IMAGE_GSD = 0.011
+
+
+def _simulated(image=IMAGE, **kwargs):
+    return lambda: xbsm.simulate_image(image, S, SC, gsd=IMAGE_GSD, noise=False, **kwargs)
+
+
 OTHER_ROWS = [
     # (id, call, exception, fragment the message must contain)
     ("sweep_on_another_parameter", lambda: xbsm.scenario(
@@ -242,6 +253,24 @@ OTHER_ROWS = [
     ("non_numeric_sweep_shown_briefly", lambda: xbsm.sensor(**{
         **SENSOR, "focal_length": xr.DataArray(["4"], dims="f")}), ValueError,
      "got an xr.DataArray of dtype <U1 on dims ('f',)"),
+    # issue 20, the review's new input classes
+    ("simulate_reflectance_range_none", _simulated(reflectance_range=None), ValueError,
+     "reflectance_range must be a pair (low, high) with 0 <= low < high <= 1; got None"),
+    ("simulate_reflectance_range_one_value", _simulated(reflectance_range=(0.5,)), ValueError,
+     "reflectance_range must be a pair (low, high) with 0 <= low < high <= 1; got (0.5,)"),
+    ("simulate_empty_image", _simulated(np.zeros((0, 0))), ValueError,
+     "image must have at least one pixel along 'y' and 'x'; got 0 x 0"),
+    ("simulate_image_without_rows", _simulated(np.zeros((0, 48))), ValueError,
+     "image must have at least one pixel along 'y' and 'x'; got 0 x 48"),
+    ("simulate_stack_dim_x_input", _simulated(xr.DataArray(
+        np.stack([IMAGE, IMAGE]), dims=("x_input", "y", "x"))), ValueError,
+     "image has a dimension 'x_input', a name simulate_image uses itself; rename it"),
+    ("simulate_stack_dim_psf_y", _simulated(xr.DataArray(
+        np.stack([IMAGE, IMAGE]), dims=("psf_y", "y", "x"))), ValueError,
+     "image has a dimension 'psf_y', a name simulate_image uses itself; rename it"),
+    ("simulate_stack_dim_counts", _simulated(xr.DataArray(
+        np.stack([IMAGE, IMAGE]), dims=("counts", "y", "x"))), ValueError,
+     "image has a dimension 'counts', a name simulate_image uses itself; rename it"),
 ]
 
 # Fragments of library internals an error message must never show the user (issue 8):
