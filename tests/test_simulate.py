@@ -488,6 +488,13 @@ def test_bad_input_is_refused_naming_the_problem(call, message):
         call()
 
 
+def test_every_name_of_the_result_is_refused_as_a_stack_dim():
+    # a stack dim named like a result dim or variable was merged into it or failed in xarray
+    from xbsm.simulate.image import RESERVED_IMAGE_DIMS
+    out = simulate(scene(16, 16), noise=False)
+    assert set(out.variables) - {"y", "x"} == set(RESERVED_IMAGE_DIMS)
+
+
 def test_upsampling_warns_once_per_call_and_flags_each_range():
     ranges = xr.DataArray([500.0, 1000.0, 20000.0], dims="ground_range")
     sc = xbsm.scenario(altitude=200.0, ground_range=ranges, visibility=23.0, cn2_at_1m=0.0)

@@ -37,6 +37,13 @@ __all__ = ["simulate_image"]
 CHANNEL_DIMS = ("band", "channel", "colour", "color")
 """Dimension names taken as an image's colour channel (percentiles span every channel)."""
 INPUT_DIMS = ("y_input", "x_input")
+RESULT_VARIABLES = ("reflectance", "ideal", "blurred", "noisy", "counts", "psf", "gsd",
+                    "gsd_x", "gsd_y", "slant_range", "scale_y", "scale_x", "offset_y",
+                    "offset_x", "size_y", "size_x", "photoelectron_offset",
+                    "photoelectron_gain", "effective_integration_time", "flags")
+"""The variables of a :func:`simulate_image` result."""
+RESERVED_IMAGE_DIMS = (*INPUT_DIMS, "psf_y", "psf_x", *RESULT_VARIABLES)
+"""Names an image's other dims may not take: the result's own dims and variables."""
 
 
 def _as_image(image, channel_dim):
@@ -55,6 +62,13 @@ def _as_image(image, channel_dim):
                          f"array; got {type(image).__name__}")
     if "y" not in image.dims or "x" not in image.dims:
         raise ValueError(f"image must have dims 'y' (rows) and 'x' (columns); got {image.dims}")
+    if image.sizes["y"] == 0 or image.sizes["x"] == 0:
+        raise ValueError("image must have at least one pixel along 'y' and 'x'; got "
+                         f"{image.sizes['y']} x {image.sizes['x']}")
+    reserved = [d for d in image.dims if d in RESERVED_IMAGE_DIMS]
+    if reserved:
+        raise ValueError(f"image has a dimension {reserved[0]!r}, a name simulate_image uses "
+                         f"itself; rename it (reserved: {', '.join(RESERVED_IMAGE_DIMS)})")
     if image.dtype.kind not in "biuf":
         raise ValueError(f"image must hold real numbers; got dtype {image.dtype}")
     if channel_dim is None:
@@ -215,7 +229,9 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
     image : xr.DataArray or np.ndarray
         Reference image(s): dims ``y`` (rows) and ``x`` (columns), optionally a colour
         channel (``band``, ``channel``, ``colour`` or ``color``, or ``channel_dim``) and any
-        leading dims (a stack). A numpy array is (rows, columns) or (rows, columns, 3|4).
+        leading dims (a stack; not named as a dim or variable of the result,
+        :data:`RESERVED_IMAGE_DIMS`). A numpy array is (rows, columns) or
+        (rows, columns, 3|4). At least one pixel each way.
         Dask-backed images stay lazy. [any: pixel values, see ``reflectance``]
     sensor, scenario : xr.Dataset
         From :func:`xbsm.sensor` and :func:`xbsm.scenario`; sweep dims broadcast (the
@@ -238,7 +254,8 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         Pixel values to reflectance (:func:`xbsm.simulate.image_to_reflectance`); default
         the method's ("percentile").
     reflectance_range : (float, float)
-        Reflectances of the two pixel values of "percentile" and "minmax". [1]
+        Reflectances of the two pixel values of "percentile" and "minmax", a pair
+        ``0 <= low < high <= 1``. [1]
     convolution, resampling, basis : str, optional
         Override the method's knobs (:class:`xbsm.simulate.ImageMethod`).
     defocus_radius : float or (float, float), optional
