@@ -467,6 +467,31 @@ def test_rgb_array_keeps_its_channels_one_mapping_for_all():
     assert means[0] > means[1] > means[2]
 
 
+def _rgba(rgb, alpha):
+    return np.concatenate([rgb, np.full(rgb.shape[:2] + (1,), alpha)], axis=-1)
+
+
+def test_rgba_array_simulates_the_rgb_alpha_does_not_enter_the_mapping():
+    # issue 20: alpha was a fourth colour band in the shared percentile mapping and moved
+    # the RGB reflectance by up to 0.21; expected: the RGB image's own simulation, exactly
+    rgb = np.stack([scene(), 0.5 * scene(), 0.25 * scene()], axis=-1)
+    out, ref = simulate(_rgba(rgb, 255.0), noise=False), simulate(rgb, noise=False)
+    assert out.sizes["band"] == 3 and out.attrs["alpha"] == "dropped"
+    xr.testing.assert_identical(out["reflectance"], ref["reflectance"])
+    xr.testing.assert_identical(out["blurred"], ref["blurred"])
+
+
+def test_a_channel_labelled_alpha_is_dropped_from_a_dataarray():
+    rgb = np.stack([scene(), 0.5 * scene(), 0.25 * scene()], axis=-1)
+    image = xr.DataArray(_rgba(rgb, 0.0), dims=("y", "x", "band"),
+                         coords={"band": ["R", "G", "B", "A"]})
+    out = simulate(image, noise=False)
+    assert out["band"].values.tolist() == ["R", "G", "B"]
+    # expected: the RGB image's own mapping (alpha 0 would pull the 0.2 percentile to 0)
+    ref = simulate(rgb, noise=False)
+    np.testing.assert_array_equal(out["reflectance"].values, ref["reflectance"].values)
+
+
 @pytest.mark.parametrize("call, message", [
     (lambda: simulate_image(scene(), SENSOR, SCENARIO), "gsd"),
     (lambda: simulate(scene(), gsd=-1.0), r"gsd must be in \(0, inf\)"),
