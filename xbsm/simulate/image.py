@@ -46,13 +46,36 @@ RESERVED_IMAGE_DIMS = (*INPUT_DIMS, "psf_y", "psf_x", *RESULT_VARIABLES)
 """Names an image's other dims may not take: the result's own dims and variables."""
 
 
+ALPHA_LABELS = ("a", "alpha")
+"""Labels (any case) of a colour channel that is opacity, dropped from the simulation."""
+
+
+def _drop_alpha(image, channel_dim):
+    """The image without its alpha channel (labelled "A" or "alpha"), and whether it had one."""
+    if channel_dim is None or channel_dim not in image.coords:
+        return image, False
+    keep = [str(label).lower() not in ALPHA_LABELS for label in image[channel_dim].values]
+    if all(keep):
+        return image, False
+    if not any(keep):
+        raise ValueError(f"image has only an alpha channel along {channel_dim!r}; give its "
+                         "colour channels")
+    return image.isel({channel_dim: np.flatnonzero(keep)}), True
+
+
 def _as_image(image, channel_dim):
-    """The reference image as a float DataArray over (..., y_input, x_input)."""
+    """The reference image as a float DataArray over (..., y_input, x_input).
+
+    Also the colour channel's dim (or None) and whether an alpha channel was dropped: the
+    fourth channel of a (rows, columns, 4) array, a channel labelled "A" or "alpha".
+    """
+    alpha = False
     if isinstance(image, np.ndarray):
         if image.ndim == 2:
             image = xr.DataArray(image, dims=("y", "x"))
         elif image.ndim == 3 and image.shape[-1] in (3, 4):
-            image = xr.DataArray(image, dims=("y", "x", "band"))
+            alpha = image.shape[-1] == 4  # RGBA: opacity is not a colour band
+            image = xr.DataArray(image[..., :3], dims=("y", "x", "band"))
         else:
             raise ValueError("image must be 2-D (rows, columns), 3-D (rows, columns, 3 or 4 "
                              f"channels) or a DataArray with dims 'y' and 'x'; got shape "
@@ -75,8 +98,10 @@ def _as_image(image, channel_dim):
         channel_dim = next((d for d in CHANNEL_DIMS if d in image.dims), None)
     elif channel_dim not in image.dims:
         raise ValueError(f"channel_dim {channel_dim!r} is not a dim of the image {image.dims}")
+    image, labelled_alpha = _drop_alpha(image, channel_dim)
     image = image.rename(y="y_input", x="x_input").astype(float)
-    return image.drop_vars([c for c in image.coords if c in INPUT_DIMS]), channel_dim
+    return (image.drop_vars([c for c in image.coords if c in INPUT_DIMS]), channel_dim,
+            alpha or labelled_alpha)
 
 
 def _reference_gsd(image, gsd):
@@ -231,7 +256,10 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         channel (``band``, ``channel``, ``colour`` or ``color``, or ``channel_dim``) and any
         leading dims (a stack; not named as a dim or variable of the result,
         :data:`RESERVED_IMAGE_DIMS`). A numpy array is (rows, columns) or
-        (rows, columns, 3|4). At least one pixel each way.
+        (rows, columns, 3|4). At least one pixel each way. An alpha channel (the
+        fourth of a (rows, columns, 4) array, or a channel labelled "A" or "alpha")
+        is dropped: it is not simulated and does not enter the reflectance mapping
+        (the result's ``alpha`` attribute says "dropped").
         Dask-backed images stay lazy. [any: pixel values, see ``reflectance``]
     sensor, scenario : xr.Dataset
         From :func:`xbsm.sensor` and :func:`xbsm.scenario`; sweep dims broadcast (the
@@ -279,7 +307,7 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
     check_inputs(sensor, scenario)
     im = image_method(method, convolution=convolution, resampling=resampling, basis=basis,
                       reflectance=reflectance if isinstance(reflectance, str) else None)
-    img, channel = _as_image(image, channel_dim)
+    img, channel, alpha = _as_image(image, channel_dim)
     gsd = _reference_gsd(img, gsd)
     shape = (img.sizes["y_input"], img.sizes["x_input"])
     mapping = im.reflectance if reflectance is None or isinstance(reflectance, str) else reflectance
@@ -309,4 +337,5 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
                   counts=camera.digitize(noisy, sensor, im.quantization))
     return _assemble(images, samp, radiometry, psf, flags, im, {
         "seed": str(entropy), "noise": "on" if noise else "off",
-        "components": " ".join(comps), "reference_gsd": str(gsd)})
+        "components": " ".join(comps), "reference_gsd": str(gsd),
+        **({"alpha": "dropped"} if alpha else {})})
