@@ -72,7 +72,7 @@ def _check_pixel_steps(image):
         if steps.size == 1 and steps[0] > 1:
             raise ValueError(
                 f"image's {dim!r} coordinate steps by {steps[0]:g} pixels: a strided view "
-                "of an image is a decimated image; measure the full-resolution pixels "
+                "of an image is a decimated image; use the full-resolution pixels "
                 "(select a region with unit steps)")
 
 
