@@ -637,6 +637,55 @@ def test_every_name_of_the_result_is_refused_as_a_stack_dim():
     assert set(out.variables) - {"y", "x"} == set(RESERVED_IMAGE_DIMS)
 
 
+# ---- outputs for datasets (issue 21) -----------------------------------------------------
+
+IMAGE_VARIABLES = ("reflectance", "ideal", "blurred", "noisy", "counts", "psf")
+
+
+def test_outputs_counts_keeps_the_counts_and_the_pixel_map_only():
+    full = simulate(scene(), seed=3)
+    counts = simulate(scene(), seed=3, outputs=("counts",))
+    assert [v for v in IMAGE_VARIABLES if v in counts] == ["counts"]
+    xr.testing.assert_identical(counts["counts"], full["counts"])
+    for name in ("scale_x", "offset_y", "size_x", "gsd", "flags"):  # labels and validity
+        xr.testing.assert_identical(counts[name], full[name])
+
+
+def test_counts_dtype_holds_the_same_counts_and_fills_cells_without_one():
+    # two ranges: the nearer image is larger, the farther one's extra cells are NaN in
+    # float64 and the dtype's maximum (the _FillValue) in uint16
+    sc = xbsm.scenario(altitude=3000.0, ground_range=xr.DataArray([4000.0, 8000.0],
+                                                                  dims="ground_range"),
+                       visibility=23.0, cn2_at_1m=0.0)
+    full = simulate(scene(), scenario=sc, seed=3)["counts"]
+    small = simulate(scene(), scenario=sc, seed=3, outputs="counts", counts_dtype="uint16")
+    counts = small["counts"]
+    assert counts.dtype == np.uint16 and counts.encoding["_FillValue"] == 65535
+    assert bool(np.isnan(full).any())
+    np.testing.assert_array_equal(counts.values, np.where(np.isnan(full), 65535, full))
+    assert counts.attrs["units"] == "1"
+    # 2 bytes per count: the dataset is the counts and a few numbers per range
+    assert small.nbytes < 2 * counts.size + 4096 < full.nbytes / 4
+
+
+def test_counts_dtype_too_narrow_for_the_bit_depth_is_refused():
+    # the 12-bit camera counts to 4095; uint8 holds 0 to 255
+    with pytest.raises(ValueError, match="counts_dtype uint8 holds 0 to 254"):
+        simulate(scene(), counts_dtype="uint8")
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(counts_dtype="float32"), "counts_dtype must be an unsigned integer dtype"),
+    (dict(counts_dtype="int16"), "counts_dtype must be an unsigned integer dtype"),
+    (dict(counts_dtype="bogus"), "counts_dtype must be an unsigned integer dtype"),
+    (dict(outputs=("noise",)), "outputs must be a non-empty selection of"),
+    (dict(outputs=()), "outputs must be a non-empty selection of"),
+])
+def test_bad_output_choices_are_refused(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        simulate(scene(), **kwargs)
+
+
 def test_upsampling_warns_once_per_call_and_flags_each_range():
     ranges = xr.DataArray([500.0, 1000.0, 20000.0], dims="ground_range")
     sc = xbsm.scenario(altitude=200.0, ground_range=ranges, visibility=23.0, cn2_at_1m=0.0)
