@@ -44,6 +44,50 @@ RESULT_VARIABLES = ("reflectance", "ideal", "blurred", "noisy", "counts", "psf",
 """The variables of a :func:`simulate_image` result."""
 RESERVED_IMAGE_DIMS = (*INPUT_DIMS, "psf_y", "psf_x", *RESULT_VARIABLES)
 """Names an image's other dims may not take: the result's own dims and variables."""
+IMAGE_OUTPUTS = ("reflectance", "ideal", "blurred", "noisy", "counts", "psf")
+"""The image-sized variables ``outputs=`` chooses from (the rest are always kept)."""
+
+
+def _check_outputs(outputs):
+    if outputs is None:
+        return IMAGE_OUTPUTS
+    chosen = (outputs,) if isinstance(outputs, str) else tuple(outputs)
+    if not chosen or any(o not in IMAGE_OUTPUTS for o in chosen):
+        raise ValueError(f"outputs must be a non-empty selection of {IMAGE_OUTPUTS}; "
+                         f"got {outputs!r}")
+    return chosen
+
+
+def _counts_fill(counts_dtype, sensor):
+    """The integer dtype of the counts and its fill value (its maximum), or (None, None)."""
+    if counts_dtype is None:
+        return None, None
+    try:
+        dtype = np.dtype(counts_dtype)
+    except TypeError:
+        dtype = None
+    if dtype is None or dtype.kind != "u":
+        raise ValueError("counts_dtype must be an unsigned integer dtype ('uint8', 'uint16', "
+                         f"'uint32', 'uint64') or None (float64); got {counts_dtype!r}")
+    fill = np.iinfo(dtype).max
+    top = float(np.max(2.0 ** sensor["bit_depth"].values - 1.0))
+    if not top < fill:
+        raise ValueError(f"counts_dtype {dtype.name} holds 0 to {fill - 1} ({fill} marks "
+                         f"cells without a count); the sensor's bit_depth gives counts up to "
+                         f"{top:.0f}: choose a wider dtype")
+    return dtype, fill
+
+
+def _integer_counts_kernel(counts, *, dtype, fill):
+    return np.where(np.isfinite(counts), counts, fill).astype(dtype)
+
+
+def _integer_counts(counts, dtype, fill):
+    """The counts in an unsigned integer dtype, ``fill`` (the ``_FillValue``) where NaN."""
+    out = xr.apply_ufunc(_integer_counts_kernel, counts, kwargs={"dtype": dtype, "fill": fill},
+                         dask="parallelized", output_dtypes=[dtype]).assign_attrs(counts.attrs)
+    out.encoding["_FillValue"] = dtype.type(fill)
+    return out
 
 
 ALPHA_LABELS = ("a", "alpha")
@@ -219,8 +263,9 @@ def _pixel_coords(ds: xr.Dataset) -> xr.Dataset:
     return ds.assign_coords(coords)
 
 
-def _assemble(images: dict, samp, radiometry, psf, flags, im: ImageMethod, attrs: dict):
-    """The result Dataset: images, kernel, pixel map and flags, each labelled."""
+def _assemble(images: dict, samp, radiometry, psf, flags, im: ImageMethod, attrs: dict,
+              outputs=IMAGE_OUTPUTS):
+    """The result Dataset: images (those of ``outputs``), kernel, pixel map and flags."""
     count = "count"
     out = xr.Dataset({
         "reflectance": images["reflectance"],
@@ -240,13 +285,14 @@ def _assemble(images: dict, samp, radiometry, psf, flags, im: ImageMethod, attrs
         "flags": flags.astype(np.int32).assign_attrs(fl.flag_attrs(
             "image simulation validity flags")),
     }, attrs={"method": im.describe(), **attrs})
-    return _pixel_coords(out)
+    return _pixel_coords(out.drop_vars([v for v in IMAGE_OUTPUTS if v not in outputs]))
 
 
 def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None, seed=None,
                    noise=True, method="accurate", components=None, reflectance=None,
                    reflectance_range=(0.05, 0.95), convolution=None, resampling=None,
-                   basis=None, defocus_radius=None, channel_dim=None) -> xr.Dataset:
+                   basis=None, defocus_radius=None, channel_dim=None, outputs=None,
+                   counts_dtype=None) -> xr.Dataset:
     """A reference image as the camera would record it in the scenario (paper Eq. 5-6).
 
     Parameters
@@ -290,6 +336,15 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         1/e radii of a Gaussian defocus OTF along x and y. [rad]
     channel_dim : str, optional
         The colour dim, if not one of the usual names.
+    outputs : str or sequence of str, optional
+        The image-sized variables to return, of :data:`IMAGE_OUTPUTS`; default all.
+        ``("counts",)`` for datasets; the pixel map, sizes, GSDs, radiometry and
+        ``flags`` are always kept.
+    counts_dtype : str or np.dtype, optional
+        An unsigned integer dtype for ``counts`` (``"uint16"`` for up to 16-bit
+        cameras); cells without a count (past each scenario's size, NaN photoelectrons)
+        hold the dtype's maximum, the variable's ``_FillValue`` (its ``encoding``: a
+        NetCDF file reads them back as NaN). Default float64 with NaN.
 
     Returns
     -------
@@ -305,6 +360,8 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         ``image_nonfinite``, ``image_flat``, ``reference_unresolved``).
     """
     check_inputs(sensor, scenario)
+    outputs = _check_outputs(outputs)
+    counts_dtype, fill = _counts_fill(counts_dtype, sensor)
     im = image_method(method, convolution=convolution, resampling=resampling, basis=basis,
                       reflectance=reflectance if isinstance(reflectance, str) else None)
     img, channel, alpha = _as_image(image, channel_dim)
@@ -333,9 +390,11 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
                                                 samp["size_x"]) for a in (blurred, noisy))
     flags = radiometry["flags"] | samp["flags"] | psf_flags | mapped["flags"]
     _warn_upsampled(samp)
-    images.update(blurred=blurred, noisy=noisy,
-                  counts=camera.digitize(noisy, sensor, im.quantization))
-    return _assemble(images, samp, radiometry, psf, flags, im, {
+    counts = camera.digitize(noisy, sensor, im.quantization)
+    if counts_dtype is not None:
+        counts = _integer_counts(counts, counts_dtype, fill)
+    images.update(blurred=blurred, noisy=noisy, counts=counts)
+    return _assemble(images, samp, radiometry, psf, flags, im, outputs=outputs, attrs={
         "seed": str(entropy), "noise": "on" if noise else "off",
         "components": " ".join(comps), "reference_gsd": str(gsd),
         **({"alpha": "dropped"} if alpha else {})})
