@@ -8,7 +8,7 @@ NIIRS chain's, the noise of a flat region with :func:`xbsm.snr`'s.
   e-SFR) and :func:`edge_rer`.
 - :mod:`xbsm.measure.flat_region`: :func:`flat_noise`.
 
-Results carry `flags` (:data:`FLAGS`: `edge_clipped`, `region_not_flat`). Regions
+Results carry ``flags`` (:data:`FLAGS`: ``edge_clipped``, ``region_not_flat``). Regions
 are contiguous: a strided region is refused (a decimated image).
 
 Images are numpy arrays or DataArrays over (``y``, ``x``) with any leading
