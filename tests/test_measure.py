@@ -371,6 +371,13 @@ def test_a_quantized_unclipped_edge_is_not_flagged():
     assert int(measure.slanted_edge_mtf(image)["flags"]) == 0
 
 
+def test_a_noiseless_quantized_sharp_edge_is_flagged_by_its_rounding():
+    # docs/measure.md's limit: sigma = 0.3 px in 8 bits from 20 to 220 reaches its plateau
+    # by rounding (Phi below 1 / 400) within half a pixel of the rise
+    image = np.round(20.0 + 200.0 * render_edge(sigma=0.3)).astype(np.uint8)
+    assert _clipped(measure.slanted_edge_mtf(image)["flags"])
+
+
 def test_a_strided_roi_is_refused():
     # a step of 2 would measure a decimated image, in cycles per two pixels
     with pytest.raises(ValueError, match="roi must select contiguous pixels"):
