@@ -14,8 +14,8 @@ STRUCTURE_SHARE = 0.1
 """Largest share of the noise variance that scene structure may hold in a flat region."""
 
 STRUCTURE_SAMPLES = 40.0
-"""The share must also exceed this over the pixel count N (white noise alone gives the
-best step about 2 ln(side) / N of its variance)."""
+"""The share must also exceed this over the pixel count N (the best step of white noise
+alone explains a few / N of its variance)."""
 
 
 def _plane_residual(values):
