@@ -1080,6 +1080,133 @@ add("grd.decreasing_frequency", GRD, "otf_slice with decreasing frequency (first
     ref=lambda: grd(10.0, "first_crossing"),
     oracle="GRD must equal the increasing-frequency result (or a clear error)")
 
+# --- issue 20: image simulation, measurement, spectral curves and geometry
+SIM_IMAGE = np.add.outer(np.arange(48.0), np.arange(48.0))
+SIM_IMAGE[16:32, 16:32] = 200.0
+SIM_GSD = 0.011  # reference GSD: about 4 reference pixels per camera pixel [m]
+
+
+def simulated(image=SIM_IMAGE, **kw):
+    return xbsm.simulate_image(image, S, SC, gsd=SIM_GSD, noise=False, **kw)
+
+
+def stacked(dim):
+    return xr.DataArray(np.stack([SIM_IMAGE, SIM_IMAGE]), dims=(dim, "y", "x"))
+
+
+def rgba():
+    rgb = np.stack([SIM_IMAGE, 0.5 * SIM_IMAGE, 0.25 * SIM_IMAGE], axis=-1)
+    return np.concatenate([rgb, np.full(SIM_IMAGE.shape + (1,), 255.0)], axis=-1)
+
+
+def rgba_check(result):
+    """Alpha dropped: three bands, the RGB image's own reflectance, recorded in the attrs."""
+    rgb = simulated(rgba()[..., :3])
+    if result.sizes.get("band") != 3 or result.attrs.get("alpha") != "dropped":
+        return "silent_wrong", f"bands {result.sizes.get('band')}, attrs alpha " \
+            f"{result.attrs.get('alpha')!r}: alpha simulated as a colour band"
+    shift = float(np.abs(result["reflectance"] - rgb["reflectance"]).max())
+    if shift:
+        return "silent_wrong", f"RGB reflectance moved by {shift:.3g} by the alpha channel"
+    return "sensible", "alpha dropped (attrs alpha='dropped'), RGB as without it"
+
+
+def slanted_edge(clip=None):
+    """A 64 x 64 edge tilted 5 degrees, Gaussian blur 1.5 px, values 0 to 1."""
+    y, x = np.indices((64, 64), dtype=float)
+    d = (x - 31.5 - np.tan(np.radians(5.0)) * (y - 31.5)) * np.cos(np.radians(5.0))
+    edge = 0.5 * (1.0 + np.vectorize(math.erf)(d / (1.5 * math.sqrt(2.0))))
+    return edge if clip is None else np.clip(edge, *clip)
+
+
+def measure_flag_check(name):
+    def check(result):
+        if bool(np.all(result["flags"] & xbsm.measure.flag(name))):
+            return "flagged", f"flag {name}"
+        return "silent_wrong", f"no {name} flag: the result is taken as valid"
+    return check
+
+
+def value_check(expected, what):
+    def check(result):
+        values = np.asarray([float(r) for r in result])
+        same = np.all((values == expected) | (np.isnan(values) & np.isnan(expected)))
+        return (("sensible", what) if same else
+                ("silent_wrong", f"got {values.tolist()}; expected {expected} ({what})"))
+    return check
+
+
+for cid, kw, names in [
+    ("reflectance_range_none", dict(reflectance_range=None), ("reflectance_range",)),
+    ("reflectance_range_one_value", dict(reflectance_range=(0.5,)), ("reflectance_range",)),
+    ("reflectance_range_three_values", dict(reflectance_range=(0.1, 0.5, 0.9)),
+     ("reflectance_range",)),
+]:
+    add(f"simulate_image.{cid}", "simulate_image", f"simulate_image(..., {kw})",
+        lambda kw=kw: simulated(**kw), names=names, main="counts")
+for cid, image, names in [
+    ("empty_image", np.zeros((0, 0)), ("image",)),
+    ("image_without_columns", np.zeros((48, 0)), ("image",)),
+    ("stack_dim_x_input", stacked("x_input"), ("image", "x_input")),
+    ("stack_dim_psf_y", stacked("psf_y"), ("image", "psf_y")),
+    ("stack_dim_counts", stacked("counts"), ("image", "counts")),
+]:
+    add(f"simulate_image.{cid}", "simulate_image", f"simulate_image({cid.replace('_', ' ')})",
+        lambda image=image: simulated(image), names=names, main="counts")
+add("simulate_image.rgba", "simulate_image", "RGBA numpy image (alpha 255 everywhere)",
+    lambda: simulated(rgba()), main="counts", expect="check", check=rgba_check,
+    oracle="alpha is not a colour: dropped (recorded), RGB reflectance as without it")
+
+add("measure.slanted_edge_mtf.clipped", "measure.slanted_edge_mtf",
+    "edge clipped at 20 % and 80 % of its step", lambda: xbsm.measure.slanted_edge_mtf(
+        slanted_edge((0.2, 0.8))), main="mtf", expect="check",
+    check=measure_flag_check("edge_clipped"),
+    oracle="clipping raises the MTF (0.13 at Nyquist for a true 1e-5): flag edge_clipped")
+add("measure.slanted_edge_mtf.saturated_uint8", "measure.slanted_edge_mtf",
+    "8-bit edge saturated at 255", lambda: xbsm.measure.slanted_edge_mtf(
+        np.clip(np.round(400.0 * slanted_edge() - 100.0), 0, 255).astype(np.uint8)),
+    main="mtf", expect="check", check=measure_flag_check("edge_clipped"),
+    oracle="saturation is clipping: flag edge_clipped")
+add("measure.slanted_edge_mtf.strided_roi", "measure.slanted_edge_mtf",
+    "roi=(slice(None), slice(None, None, 2))", lambda: xbsm.measure.slanted_edge_mtf(
+        slanted_edge(), roi=(slice(None), slice(None, None, 2))), names=("roi",), main="mtf")
+add("measure.slanted_edge_mtf.strided_view", "measure.slanted_edge_mtf",
+    "DataArray with pixel coordinates sliced [::2]", lambda: xbsm.measure.slanted_edge_mtf(
+        xr.DataArray(slanted_edge(), dims=("y", "x"),
+                     coords={"y": np.arange(64), "x": np.arange(64)})[::2]),
+    names=("image",), main="mtf")
+add("measure.flat_noise.edge_in_region", "measure.flat_noise",
+    "an edge inside the region, 1 % noise", lambda: xbsm.measure.flat_noise(
+        slanted_edge() + np.random.default_rng(0).normal(0.0, 0.01, (64, 64))),
+    main="noise", expect="check", check=measure_flag_check("region_not_flat"),
+    oracle="the edge is not noise: flag region_not_flat")
+add("measure.flat_noise.strided_region", "measure.flat_noise",
+    "region=(slice(0, 40, 2), slice(0, 20))", lambda: xbsm.measure.flat_noise(
+        slanted_edge(), region=(slice(0, 40, 2), slice(0, 20))), names=("region",),
+    main="noise")
+
+add("radiometry.resample_spectral.empty_curve", "radiometry.resample_spectral",
+    "quantum_efficiency curve without samples", lambda: xbsm.radiometry.resample_spectral(
+        xr.DataArray(np.array([]), dims="quantum_efficiency_wavelength",
+                     coords={"quantum_efficiency_wavelength": np.array([])}),
+        xr.DataArray([0.6e-6], dims="wavelength"), "quantum_efficiency"),
+    names=("quantum_efficiency",), main="quantum_efficiency")
+
+add("geometry.zero_slant_range_equal_heights", "geometry",
+    "nadir_angle and altitude_along_path at slant range 0, sensor and target at 9 km",
+    lambda: (xbsm.geometry.nadir_angle(0.0, 9000.0, 9000.0),
+             xbsm.geometry.altitude_along_path(0.0, 0.0, 9000.0, 9000.0)),
+    main="nadir_angle", expect="check",
+    check=value_check(np.array([math.pi / 2, 9000.0]), "the limits pi/2 and the height"),
+    oracle="coincident points: the limits as the path shrinks (documented)")
+add("geometry.zero_slant_range_below_sensor", "geometry",
+    "nadir_angle and altitude_along_path at slant range 0, sensor at 9 km, target at 0",
+    lambda: (xbsm.geometry.nadir_angle(0.0, 9000.0),
+             xbsm.geometry.altitude_along_path(0.0, 0.0, 9000.0)),
+    main="nadir_angle", expect="check",
+    check=value_check(np.array([NAN, NAN]), "NaN: no such line of sight (documented)"),
+    oracle="no triangle (slant range below the height difference): NaN, documented")
+
 # --- command line (run as a subprocess; {tmp} is a fresh temporary folder)
 CLI = [
     ("no_args", [], ("command",), "reject"),

@@ -17,10 +17,12 @@ go through:
   ``use_reflectance=True`` (min-max mapping to reflectance 0.05-0.95):
   ``SystemOTFSimulator`` (``pad_fftconvolve``, PIL bilinear resampling) and
   each single-mechanism simulator (jitter, circular aperture, detector,
-  defocus, turbulence).
+  defocus, turbulence), each also with ``gsd=None`` (no resampling: the kernel
+  at the OTF grid's own spacing ``1 / (1501 df)``, stored as ``native_angle``).
 
 Each case stores the true image (photoelectrons on the reference grid), the
-blurred and resampled image and the blur kernel pyBSM built, with its inputs
+blurred and resampled image and the blur kernel pyBSM built (and, for the
+classes, ``blurred_native`` and ``psf_native`` of ``gsd=None``), with its inputs
 as JSON (``cases``). The noisy images depend on pyBSM's random streams and are
 not stored. No random numbers; about 1 min (the 1501^2 OTFs).
 """
@@ -109,7 +111,11 @@ def simulator_case(kind, sensor_kw, scenario_kw, image, ratio):
     sim = getattr(sims, kind)(sensor=sensor, scenario=scenario, add_noise=False,
                               use_reflectance=True, reflectance_range=np.array([0.05, 0.95]))
     true_img, blur_img, _ = sim.simulate_image(image, gsd)
-    return gsd, true_img, blur_img, sim._get_psf_cached(gsd=gsd)
+    psf = sim._get_psf_cached(gsd=gsd)
+    _, native_img, _ = sim.simulate_image(image, None)  # gsd=None: no resampling
+    native = dict(blurred_native=native_img, psf_native=sim._get_psf_cached(use_default=True),
+                  native_angle=1.0 / (sim.uu.shape[0] * sim._df))
+    return gsd, true_img, blur_img, psf, native
 
 
 def cases() -> list[dict]:
@@ -153,7 +159,9 @@ def main() -> None:
         if case["path"] == "functional":
             gsd, true_img, blur_img, psf = functional_case(*args)
         else:
-            gsd, true_img, blur_img, psf = simulator_case(case["path"], *args)
+            gsd, true_img, blur_img, psf, native = simulator_case(case["path"], *args)
+            case["native_angle"] = native.pop("native_angle")
+            data.update({f"{case['id']}/{key}": value for key, value in native.items()})
         case["gsd"] = gsd
         data[f"{case['id']}/ideal"] = true_img
         data[f"{case['id']}/blurred"] = blur_img

@@ -88,6 +88,28 @@ def _edited(**changes):
     return lambda: xbsm.snr(S.assign(**changes), SC)
 
 
+# a reference image for xbsm.simulate_image: a bright square on a gradient, 4 reference
+# pixels per camera pixel (the camera's GSD is 8 um / 4 m x 21.9 km = 4.4 cm)
+IMAGE = np.add.outer(np.arange(48.0), np.arange(48.0))
+IMAGE[16:32, 16:32] = 200.0
+IMAGE_GSD = 0.011
+
+
+def _simulated(image=IMAGE, **kwargs):
+    return lambda: xbsm.simulate_image(image, S, SC, gsd=IMAGE_GSD, noise=False, **kwargs)
+
+
+def _edge(clip=None):
+    """A 64 x 64 edge tilted 5 degrees, a Gaussian blur of 1.5 px (values 0 to 1)."""
+    y, x = np.indices((64, 64), dtype=float)
+    distance = (x - 31.5 - np.tan(np.radians(5.0)) * (y - 31.5)) * np.cos(np.radians(5.0))
+    edge = 0.5 * (1.0 + np.vectorize(math.erf)(distance / (1.5 * math.sqrt(2.0))))
+    return edge if clip is None else np.clip(edge, *clip)
+
+
+EDGE = _edge()
+
+
 OTHER_ROWS = [
     # (id, call, exception, fragment the message must contain)
     ("sweep_on_another_parameter", lambda: xbsm.scenario(
@@ -242,6 +264,38 @@ OTHER_ROWS = [
     ("non_numeric_sweep_shown_briefly", lambda: xbsm.sensor(**{
         **SENSOR, "focal_length": xr.DataArray(["4"], dims="f")}), ValueError,
      "got an xr.DataArray of dtype <U1 on dims ('f',)"),
+    # issue 20, the review's new input classes
+    ("simulate_reflectance_range_none", _simulated(reflectance_range=None), ValueError,
+     "reflectance_range must be a pair (low, high) with 0 <= low < high <= 1; got None"),
+    ("simulate_reflectance_range_one_value", _simulated(reflectance_range=(0.5,)), ValueError,
+     "reflectance_range must be a pair (low, high) with 0 <= low < high <= 1; got (0.5,)"),
+    ("simulate_empty_image", _simulated(np.zeros((0, 0))), ValueError,
+     "image must have at least one pixel along 'y' and 'x'; got 0 x 0"),
+    ("simulate_image_without_rows", _simulated(np.zeros((0, 48))), ValueError,
+     "image must have at least one pixel along 'y' and 'x'; got 0 x 48"),
+    ("simulate_stack_dim_x_input", _simulated(xr.DataArray(
+        np.stack([IMAGE, IMAGE]), dims=("x_input", "y", "x"))), ValueError,
+     "image has a dimension 'x_input', a name simulate_image uses itself; rename it"),
+    ("simulate_stack_dim_psf_y", _simulated(xr.DataArray(
+        np.stack([IMAGE, IMAGE]), dims=("psf_y", "y", "x"))), ValueError,
+     "image has a dimension 'psf_y', a name simulate_image uses itself; rename it"),
+    ("simulate_stack_dim_counts", _simulated(xr.DataArray(
+        np.stack([IMAGE, IMAGE]), dims=("counts", "y", "x"))), ValueError,
+     "image has a dimension 'counts', a name simulate_image uses itself; rename it"),
+    ("resample_spectral_empty_curve", lambda: xbsm.radiometry.resample_spectral(
+        xr.DataArray(np.array([]), dims="quantum_efficiency_wavelength",
+                     coords={"quantum_efficiency_wavelength": np.array([])}),
+        xr.DataArray([0.6e-6], dims="wavelength"), "quantum_efficiency"), ValueError,
+     "quantum_efficiency is an empty curve: give at least one sample"),
+    ("measure_strided_roi", lambda: xbsm.measure.slanted_edge_mtf(
+        EDGE, roi=(slice(None), slice(None, None, 2))), ValueError,
+     "roi must select contiguous pixels: slices with step 1; got step 2 along 'x'"),
+    ("measure_roi_positions_skip_pixels", lambda: xbsm.measure.flat_noise(
+        EDGE, region=(np.arange(0, 40, 3), slice(0, 20))), ValueError,
+     "region must select contiguous pixels"),
+    ("measure_strided_view", lambda: xbsm.measure.slanted_edge_mtf(xr.DataArray(
+        EDGE, dims=("y", "x"), coords={"y": np.arange(64), "x": np.arange(64)})[::2]),
+     ValueError, "image's 'y' coordinate steps by 2 pixels"),
 ]
 
 # Fragments of library internals an error message must never show the user (issue 8):
@@ -257,6 +311,50 @@ def test_bad_call_raises_a_clear_error(call, error, fragment):
         call()
     assert fragment in str(err.value), str(err.value)
     assert not [part for part in INTERNALS if part in str(err.value)], str(err.value)
+
+
+# --- issue 20: the review's new inputs that give a result: flagged or documented ----------
+
+def _has_measure_flag(name):
+    return lambda result: bool(np.all(result["flags"] & xbsm.measure.flag(name)))
+
+
+def _rgba():
+    rgb = np.stack([IMAGE, 0.5 * IMAGE, 0.25 * IMAGE], axis=-1)
+    return np.concatenate([rgb, np.full(IMAGE.shape + (1,), 255.0)], axis=-1)
+
+
+RESULT_ROWS = [
+    # (id, call, check the result must pass, what it is): a flag bit, or the documented
+    # handling of a legitimate input (alpha dropped; the geometry's limit or NaN)
+    ("simulate_rgba", _simulated(_rgba()),
+     lambda r: r.attrs["alpha"] == "dropped" and r.sizes["band"] == 3,
+     "alpha dropped, recorded in attrs['alpha'] (docs/simulate.md)"),
+    ("measure_clipped_edge", lambda: xbsm.measure.slanted_edge_mtf(_edge(clip=(0.2, 0.8))),
+     _has_measure_flag("edge_clipped"), "flag edge_clipped (docs/measure.md)"),
+    ("measure_saturated_uint8_edge", lambda: xbsm.measure.slanted_edge_mtf(
+        np.clip(np.round(400.0 * EDGE - 100.0), 0, 255).astype(np.uint8)),
+     _has_measure_flag("edge_clipped"), "flag edge_clipped (docs/measure.md)"),
+    ("flat_noise_edge_in_region", lambda: xbsm.measure.flat_noise(
+        EDGE + np.random.default_rng(0).normal(0.0, 0.01, EDGE.shape)),
+     _has_measure_flag("region_not_flat"), "flag region_not_flat (docs/measure.md)"),
+    ("geometry_zero_slant_range_equal_heights", lambda: (
+        xbsm.geometry.nadir_angle(0.0, 9000.0, 9000.0),
+        xbsm.geometry.altitude_along_path(0.0, 0.0, 9000.0, 9000.0)),
+     lambda r: float(r[0]) == math.pi / 2 and float(r[1]) == 9000.0,
+     "the limits pi/2 and the height (docstrings, docs/migration.md)"),
+    ("geometry_zero_slant_range_below_sensor", lambda: (
+        xbsm.geometry.nadir_angle(0.0, 9000.0),
+        xbsm.geometry.altitude_along_path(0.0, 0.0, 9000.0)),
+     lambda r: bool(np.isnan(r[0])) and bool(np.isnan(r[1])),
+     "NaN: no line of sight is shorter than the height difference (docstrings)"),
+]
+
+
+@pytest.mark.parametrize("call, check",
+                         [pytest.param(c, k, id=i) for i, c, k, _ in RESULT_ROWS])
+def test_odd_input_gives_a_flagged_or_documented_result(call, check):
+    assert check(call())
 
 
 # --- inputs that are legitimate but odd: converted, promoted or flagged, never silent ------

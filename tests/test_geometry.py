@@ -133,3 +133,40 @@ def test_viewing_geometry_keeps_each_output_on_its_dims_and_dask_lazy(no_compute
     assert all(isinstance(lazy[n].data, da.Array) for n in ("slant_range", "gsd_x"))
     with dask.config.set(scheduler="sync"):
         xr.testing.assert_identical(lazy.compute(), eager)
+
+
+# ---- zero and impossible slant ranges (issue 20) -------------------------------------
+
+@pytest.mark.parametrize("form", geometry.FORMS)
+@pytest.mark.parametrize("height", [0.0, 9000.0])
+def test_zero_slant_range_between_equal_heights_looks_along_the_horizontal(form, height):
+    # sensor and target coincide: the limit of ground range g -> 0 at equal heights, where
+    # the chord's nadir angle is pi/2 - g / (2 R_e) (closed form) and the point's own
+    # height is the path's. pyBSM's law of cosines divides by zero here
+    near = geometry.nadir_angle(geometry.slant_range(1e-3, height, height), height, height,
+                                form="stable")
+    assert float(near) == pytest.approx(np.pi / 2 - 0.5e-3 / EARTH_RADIUS, abs=1e-12)
+    assert float(geometry.nadir_angle(0.0, height, height, form=form)) == np.pi / 2
+    assert float(geometry.elevation_angle(0.0, height, height, form=form)) == 0.0
+    assert float(geometry.target_elevation_angle(0.0, height, height, form=form)) == 0.0
+    assert float(geometry.altitude_along_path(0.0, 0.0, height, height, form=form)) == height
+
+
+@pytest.mark.parametrize("form", geometry.FORMS)
+@pytest.mark.parametrize("slant", [0.0, 8999.0])
+def test_a_slant_range_shorter_than_the_height_difference_is_nan(form, slant):
+    # no triangle: the line of sight is at least the 9 km vertical distance (it returned
+    # 0 rad and the sensor altitude, or raised ZeroDivisionError for law-of-cosines)
+    assert np.isnan(geometry.nadir_angle(slant, 9000.0, form=form))
+    assert np.isnan(geometry.elevation_angle(slant, 9000.0, form=form))
+    assert np.isnan(geometry.target_elevation_angle(slant, 9000.0, form=form))
+    assert np.isnan(geometry.altitude_along_path(0.0, slant, 9000.0, form=form))
+
+
+@pytest.mark.parametrize("form", geometry.FORMS)
+def test_the_vertical_slant_range_is_nadir_not_nan(form):
+    # the shortest line of sight, straight down; an altitude whose R_e + h rounds up
+    # (0.1 m: (R_e + 0.1) - R_e = 0.0999999996 m) is still a triangle
+    for height in (9000.0, 0.1):
+        assert float(geometry.nadir_angle(height, height, form=form)) == pytest.approx(
+            0.0, abs=1e-3)

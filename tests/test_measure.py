@@ -333,7 +333,92 @@ def test_bad_knobs_raise_a_clear_error(kwargs, message):
         measure.slanted_edge_mtf(render_edge(shape=(32, 32)), **kwargs)
 
 
+# ---- clipping and strided regions (issue 20) ---------------------------------------
+
+def _clipped(flags):
+    return bool(np.all(flags & measure.flag("edge_clipped")))
+
+
+def test_an_edge_clipped_inside_its_transition_is_flagged():
+    # the sigma = 1.5 px edge clipped at 20 % and 80 % of its step: its true MTF at Nyquist
+    # is 1e-5 (closed form, true_mtf), the clipped edge's measures 0.13; flagged, not silent
+    image = np.clip(render_edge(sigma=1.5), 0.2, 0.8)
+    result = measure.slanted_edge_mtf(image)
+    assert float(result["mtf"].interp(frequency=0.5)) == pytest.approx(0.13, abs=0.005)
+    assert _clipped(result["flags"])
+
+
+def test_an_edge_saturated_at_the_dtype_limit_is_flagged():
+    # an 8-bit camera saturating at 255 on the bright side of the edge
+    image = np.clip(np.round(render_edge(sigma=1.5) * 400.0 - 100.0), 0, 255).astype(np.uint8)
+    assert _clipped(measure.slanted_edge_mtf(image)["flags"])
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.01])
+def test_an_unclipped_edge_is_not_flagged(noise):
+    # the noiseless render holds exact plateaus (Phi underflows to 0 57 px from the edge),
+    # far outside the transition; with noise the extreme pixels are single noise peaks
+    image = render_edge(sigma=1.5) + np.random.default_rng(4).normal(0.0, noise, SHAPE)
+    result = measure.slanted_edge_mtf(image)
+    assert int(result["flags"]) == 0
+    assert result["flags"].attrs["flag_meanings"].split()[0] == "edge_clipped"
+
+
+def test_a_quantized_unclipped_edge_is_not_flagged():
+    # 12 bits from 100 to 3900 counts: rounding makes plateaus, but no pixel of the
+    # transition sits at the image's extremes or at the dtype's
+    image = np.round(100.0 + 3800.0 * render_edge(sigma=1.0)).astype(np.uint16)
+    assert int(measure.slanted_edge_mtf(image)["flags"]) == 0
+
+
+def test_a_noiseless_quantized_sharp_edge_is_flagged_by_its_rounding():
+    # docs/measure.md's limit: sigma = 0.3 px in 8 bits from 20 to 220 reaches its plateau
+    # by rounding (Phi below 1 / 400) within half a pixel of the rise
+    image = np.round(20.0 + 200.0 * render_edge(sigma=0.3)).astype(np.uint8)
+    assert _clipped(measure.slanted_edge_mtf(image)["flags"])
+
+
+def test_a_strided_roi_is_refused():
+    # a step of 2 would measure a decimated image, in cycles per two pixels
+    with pytest.raises(ValueError, match="roi must select contiguous pixels"):
+        measure.slanted_edge_mtf(render_edge(), roi=(slice(None, None, 2), slice(None)))
+
+
+def test_a_strided_view_of_an_image_with_pixel_coordinates_is_refused():
+    image = xr.DataArray(render_edge(), dims=("y", "x"),
+                         coords={"y": np.arange(128), "x": np.arange(128)})
+    with pytest.raises(ValueError, match="image's 'x' coordinate steps by 2 pixels"):
+        measure.slanted_edge_mtf(image.isel(x=slice(None, None, 2)))
+
+
 # ---- noise in flat regions ----------------------------------------------------------
+
+def _not_flat(result):
+    return bool(np.all(result["flags"] & measure.flag("region_not_flat")))
+
+
+def test_flat_noise_flags_an_edge_inside_the_region():
+    # a step of 4 sigma across the region: its variance (4 p (1 - p) sigma^2 at the
+    # fraction p = 0.5 of the columns) would be reported as noise
+    field = np.random.default_rng(5).normal(0.0, 1.0, (60, 60))
+    field[:, 30:] += 4.0
+    for detrend in (False, True):
+        assert _not_flat(measure.flat_noise(field, detrend=detrend))
+
+
+def test_flat_noise_flags_a_gradient_unless_detrended():
+    sigma, n = 2.0, 100
+    y, x = np.indices((n, n))
+    field = np.random.default_rng(2).normal(0.0, sigma, (n, n)) + 0.05 * x + 0.02 * y
+    assert _not_flat(measure.flat_noise(field))
+    assert not _not_flat(measure.flat_noise(field, detrend=True))
+
+
+@pytest.mark.parametrize("shape", [(3, 3), (10, 10), (40, 40), (200, 200), (8, 200)])
+def test_flat_noise_does_not_flag_a_noise_field(shape):
+    field = np.random.default_rng(6).normal(10.0, 2.0, shape)
+    assert int(measure.flat_noise(field)["flags"]) == 0
+
 
 def test_flat_noise_of_a_seeded_gaussian_field_is_within_its_sampling_error():
     # N = 40,000 independent samples: standard errors sigma / sqrt(2 (N - 1)) of the

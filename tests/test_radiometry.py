@@ -77,6 +77,15 @@ def test_resample_spectral_zero_outside_curve():
     assert list(out.values) == [0.0, 0.75, 0.0]
 
 
+def test_resample_spectral_refuses_an_empty_curve_naming_the_parameter():
+    # issue 20: a curve with no samples raised a bare IndexError inside the kernel
+    curve = xr.DataArray(np.array([]), dims="quantum_efficiency_wavelength",
+                         coords={"quantum_efficiency_wavelength": np.array([])})
+    wl = xr.DataArray([0.5e-6, 1.5e-6], dims="wavelength")
+    with pytest.raises(ValueError, match="quantum_efficiency is an empty curve"):
+        radiometry.resample_spectral(curve, wl, "quantum_efficiency")
+
+
 # ---- the kernels under the xarray layer ---------------------------------------------
 
 @pytest.mark.parametrize("size", [1, 2, 5])

@@ -118,6 +118,123 @@ def test_pybsm_blur_kernel_is_reproduced_with_its_size(case_id):
     assert abs(psf.sum() - window.sum()) < 1e-15  # nothing outside pyBSM's crop
 
 
+# ---- docs/simulate.md's pyBSM-parity statements, each against the fixture ------------
+
+def _page_text():
+    return " ".join((DOCS / "simulate.md").read_text().split())
+
+
+def _stated(pattern):
+    """The number the page states where ``pattern`` (its group 1) matches."""
+    import re
+
+    match = re.search(pattern, _page_text())
+    assert match, f"docs/simulate.md no longer states {pattern!r}"
+    return float(match.group(1))
+
+
+@functools.cache
+def _parity_errors():
+    """Largest differences from the fixture over the parity cases (as the parity tests)."""
+    errors = dict(ideal=0.0, kernel=0.0, blurred=0.0)
+    for case_id in _case_ids():
+        out, ref = _parity_run(case_id)
+        psf, expected = out["psf"].values, ref["psf"]
+        half, (rows, cols) = psf.shape[0] // 2, expected.shape
+        window = psf[half - rows // 2: half - rows // 2 + rows,
+                     half - cols // 2: half - cols // 2 + cols]
+        errors = dict(
+            ideal=max(errors["ideal"], np.abs(out["ideal"].values / ref["ideal"] - 1).max()),
+            kernel=max(errors["kernel"], np.abs(window - expected).max() / expected.max()),
+            blurred=max(errors["blurred"],
+                        np.abs(out["blurred"].values / ref["blurred"] - 1).max()))
+    return errors
+
+
+@pytest.mark.parametrize("pattern, error", [
+    (r"the ideal images to (\S+),", "ideal"),
+    (r"and even\) to (\S+) of their peak", "kernel"),
+    (r"the x/y-swapped ones included\) to (\S+) relative", "blurred"),
+])
+def test_the_page_parity_bounds_hold_on_the_fixture(pattern, error):
+    # the page's bound holds and is the measured value rounded up (not a stale loose bound)
+    stated, measured = _stated(pattern), _parity_errors()[error]
+    assert stated / 2 <= measured <= stated
+
+
+def test_the_page_counts_the_fixture_parity_cases():
+    assert _stated(r"class without noise on (\d+) cases") == len(_case_ids())
+
+
+def test_the_page_simulator_table_is_pybsm_simulators():
+    # every row of the page's class table, cell by cell, is PYBSM_SIMULATORS (the keywords
+    # the parity cases run with)
+    import re
+
+    rows = re.findall(r"^\| `(\w+Simulator)` \| (.*?) \|$", (DOCS / "simulate.md").read_text(),
+                      flags=re.M)
+    assert sorted(name for name, _ in rows) == sorted(PYBSM_SIMULATORS)
+    for name, cells in rows:
+        components, convolution, resampling, basis = (c.strip() for c in cells.split(" | "))
+        knobs = PYBSM_SIMULATORS[name]
+        expected = ("the system" if knobs["components"] is None
+                    else f"`{knobs['components'][0]}`")
+        assert components.startswith(expected)
+        assert [convolution.split()[0], resampling, basis] == [
+            f"`{knobs[k]}`" for k in ("convolution", "resampling", "basis")]
+
+
+@functools.cache
+def _native_runs():
+    """pyBSM's gsd=None outputs and xbsm's, with resampling="none" at the kernel's angle and
+    at the fixture's own gsd: largest relative differences."""
+    cases, arrays = _fixture()
+    native = own = 0.0
+    for case in (c for c in cases if "native_angle" in c):
+        options = dict(PYBSM_SIMULATORS[case["path"]], reflectance="minmax", resampling="none")
+        sensor, scenario = compat.sensor(**case["sensor"]), compat.scenario(**case["scenario"])
+        image, ref = arrays[f"image/{case['image']}"], arrays[f"{case['id']}/blurred_native"]
+        slant = np.hypot(case["scenario"]["altitude"], case["scenario"]["ground_range"])
+        for gsd, name in ((2 * slant * np.tan(case["native_angle"] / 2), "native"),
+                          (case["gsd"], "own")):
+            out = simulate_image(image, sensor, scenario, gsd=gsd, noise=False,
+                                 method="pybsm", **options)
+            error = np.abs(out["blurred"].values / ref - 1).max()
+            native, own = (max(native, error), own) if name == "native" else (native,
+                                                                              max(own, error))
+    return native, own
+
+
+def test_the_page_gsd_none_recipe_reproduces_pybsm_gsd_none():
+    # pyBSM's ImageSimulator.simulate_image(image, None) on the 6 class cases of the fixture
+    assert _stated(r"On the (\d+) simulator cases") == sum(
+        "native_angle" in c for c in _fixture()[0])
+    stated, measured = _stated(r"agrees with pyBSM's `gsd=None` to (\S+) relative"), \
+        _native_runs()[0]
+    assert stated / 2 <= measured <= stated
+
+
+def test_the_page_gsd_none_is_not_resampling_none_at_the_own_gsd():
+    stated = _stated(r"differs from it by up to (\S+) % of a pixel's value")
+    assert round(100 * _native_runs()[1], 1) == stated
+
+
+def test_the_page_gsd_none_angle_is_the_fixture_grid_spacing():
+    # angle = 1500 lambda_min / (3002 D), lambda_min the shortest wavelength of positive
+    # weight (the page: 0.46 um for the fixture camera)
+    from xbsm.simulate import reflectance_to_photoelectrons
+
+    lambda_min = _stated(r"method=\"pybsm\"\)`: (\S+) um for the fixture camera") * 1e-6
+    for case in (c for c in _fixture()[0] if "native_angle" in c):
+        sensor, scenario = compat.sensor(**case["sensor"]), compat.scenario(**case["scenario"])
+        weights = reflectance_to_photoelectrons(sensor, scenario,
+                                                method="pybsm")["spectral_weights"]
+        assert float(weights["wavelength"].where(weights > 0).min()) == pytest.approx(
+            lambda_min, rel=1e-12)
+        assert case["native_angle"] == pytest.approx(
+            1500 * lambda_min / (3002 * case["sensor"]["D"]), rel=1e-12)
+
+
 # ---- the accurate blur ----------------------------------------------------------------
 
 def test_flat_field_stays_flat_the_blur_conserves_energy():
@@ -467,6 +584,31 @@ def test_rgb_array_keeps_its_channels_one_mapping_for_all():
     assert means[0] > means[1] > means[2]
 
 
+def _rgba(rgb, alpha):
+    return np.concatenate([rgb, np.full(rgb.shape[:2] + (1,), alpha)], axis=-1)
+
+
+def test_rgba_array_simulates_the_rgb_alpha_does_not_enter_the_mapping():
+    # issue 20: alpha was a fourth colour band in the shared percentile mapping and moved
+    # the RGB reflectance by up to 0.21; expected: the RGB image's own simulation, exactly
+    rgb = np.stack([scene(), 0.5 * scene(), 0.25 * scene()], axis=-1)
+    out, ref = simulate(_rgba(rgb, 255.0), noise=False), simulate(rgb, noise=False)
+    assert out.sizes["band"] == 3 and out.attrs["alpha"] == "dropped"
+    xr.testing.assert_identical(out["reflectance"], ref["reflectance"])
+    xr.testing.assert_identical(out["blurred"], ref["blurred"])
+
+
+def test_a_channel_labelled_alpha_is_dropped_from_a_dataarray():
+    rgb = np.stack([scene(), 0.5 * scene(), 0.25 * scene()], axis=-1)
+    image = xr.DataArray(_rgba(rgb, 0.0), dims=("y", "x", "band"),
+                         coords={"band": ["R", "G", "B", "A"]})
+    out = simulate(image, noise=False)
+    assert out["band"].values.tolist() == ["R", "G", "B"]
+    # expected: the RGB image's own mapping (alpha 0 would pull the 0.2 percentile to 0)
+    ref = simulate(rgb, noise=False)
+    np.testing.assert_array_equal(out["reflectance"].values, ref["reflectance"].values)
+
+
 @pytest.mark.parametrize("call, message", [
     (lambda: simulate_image(scene(), SENSOR, SCENARIO), "gsd"),
     (lambda: simulate(scene(), gsd=-1.0), r"gsd must be in \(0, inf\)"),
@@ -486,6 +628,63 @@ def test_rgb_array_keeps_its_channels_one_mapping_for_all():
 def test_bad_input_is_refused_naming_the_problem(call, message):
     with pytest.raises(ValueError, match=message):
         call()
+
+
+def test_every_name_of_the_result_is_refused_as_a_stack_dim():
+    # a stack dim named like a result dim or variable was merged into it or failed in xarray
+    from xbsm.simulate.image import RESERVED_IMAGE_DIMS
+    out = simulate(scene(16, 16), noise=False)
+    assert set(out.variables) - {"y", "x"} == set(RESERVED_IMAGE_DIMS)
+
+
+# ---- outputs for datasets (issue 21) -----------------------------------------------------
+
+IMAGE_VARIABLES = ("reflectance", "ideal", "blurred", "noisy", "counts", "psf")
+
+
+def test_outputs_counts_keeps_the_counts_and_the_pixel_map_only():
+    full = simulate(scene(), seed=3)
+    counts = simulate(scene(), seed=3, outputs=("counts",))
+    assert [v for v in IMAGE_VARIABLES if v in counts] == ["counts"]
+    xr.testing.assert_identical(counts["counts"], full["counts"])
+    for name in ("scale_x", "offset_y", "size_x", "gsd", "flags"):  # labels and validity
+        xr.testing.assert_identical(counts[name], full[name])
+
+
+def test_counts_dtype_holds_the_same_counts_and_fills_cells_without_one():
+    # two ranges: the nearer image is larger, the farther one's extra cells are NaN in
+    # float64 and the dtype's maximum (the _FillValue) in uint16
+    sc = xbsm.scenario(altitude=3000.0, ground_range=xr.DataArray([4000.0, 8000.0],
+                                                                  dims="ground_range"),
+                       visibility=23.0, cn2_at_1m=0.0)
+    everything = simulate(scene(), scenario=sc, seed=3)
+    full = everything["counts"]
+    small = simulate(scene(), scenario=sc, seed=3, outputs="counts", counts_dtype="uint16")
+    counts = small["counts"]
+    assert counts.dtype == np.uint16 and counts.encoding["_FillValue"] == 65535
+    assert bool(np.isnan(full).any())
+    np.testing.assert_array_equal(counts.values, np.where(np.isnan(full), 65535, full))
+    assert counts.attrs["units"] == "1"
+    # 2 bytes per count: the dataset is the counts and a few numbers per range
+    assert small.nbytes < 2 * counts.size + 4096 < everything.nbytes / 4
+
+
+def test_counts_dtype_too_narrow_for_the_bit_depth_is_refused():
+    # the 12-bit camera counts to 4095; uint8 holds 0 to 255
+    with pytest.raises(ValueError, match="counts_dtype uint8 holds 0 to 254"):
+        simulate(scene(), counts_dtype="uint8")
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(counts_dtype="float32"), "counts_dtype must be an unsigned integer dtype"),
+    (dict(counts_dtype="int16"), "counts_dtype must be an unsigned integer dtype"),
+    (dict(counts_dtype="bogus"), "counts_dtype must be an unsigned integer dtype"),
+    (dict(outputs=("noise",)), "outputs must be a non-empty selection of"),
+    (dict(outputs=()), "outputs must be a non-empty selection of"),
+])
+def test_bad_output_choices_are_refused(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        simulate(scene(), **kwargs)
 
 
 def test_upsampling_warns_once_per_call_and_flags_each_range():

@@ -45,31 +45,51 @@ def _slant_range_cosines(target_altitude, sensor_altitude, ground_range):
         return np.sqrt(c**2.0 + a**2.0 - 2.0 * a * c * np.cos(ground_range / EARTH_RADIUS))
 
 
+def _degenerate(angle, slant_range, a, c, coincident):
+    """``angle`` where the triangle (Earth centre, sensor, target) exists, else its limit.
+
+    NaN where the slant range is shorter than the height difference (beyond rounding:
+    8 ulp of ``a^2 + c^2`` on the squares, the law of cosines' own error);
+    ``coincident`` at zero slant range between equal heights.
+    """
+    d = np.abs(a - c)
+    no_triangle = (d - slant_range) * (d + slant_range) > 8.0 * np.finfo(float).eps * (
+        a * a + c * c)
+    coincide = (slant_range == 0.0) & (d == 0.0)
+    return np.where(no_triangle, np.nan, np.where(coincide, coincident, angle))[()]
+
+
 def _nadir_angle_stable(target_altitude, slant_range, sensor_altitude):
     with np.errstate(all="ignore"):
         a = EARTH_RADIUS + sensor_altitude
         c = EARTH_RADIUS + target_altitude
         sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
-        return np.arctan2(c * sine, (a - c) + c * two_half_sq)
+        angle = np.arctan2(c * sine, (a - c) + c * two_half_sq)
+        return _degenerate(angle, slant_range, a, c, np.pi / 2)
 
 
 def _nadir_angle_cosines(target_altitude, sensor_altitude, slant_range):
     with np.errstate(all="ignore"):
         a = EARTH_RADIUS + sensor_altitude
         c = EARTH_RADIUS + target_altitude
+        slant_range = np.asarray(slant_range, dtype=float)  # 0 gives inf, not an exception
         cosine = -(c**2.0 - a**2.0 - slant_range**2.0) / (2.0 * a * slant_range)
-        return np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0))
+        angle = np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0))
+        return _degenerate(angle, slant_range, a, c, np.pi / 2)
 
 
 def _target_elevation_kernel(sensor_altitude, target_altitude, slant_range, form):
     with np.errstate(all="ignore"):
         a = EARTH_RADIUS + sensor_altitude
         c = EARTH_RADIUS + target_altitude
+        slant_range = np.asarray(slant_range, dtype=float)
         if form == "law-of-cosines":
             cosine = (a**2.0 - c**2.0 - slant_range**2.0) / (2.0 * c * slant_range)
-            return np.arcsin(np.minimum(np.maximum(cosine, -1.0), 1.0))
-        sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
-        return np.arctan2((a - c) - a * two_half_sq, a * sine)
+            angle = np.arcsin(np.minimum(np.maximum(cosine, -1.0), 1.0))
+        else:
+            sine, _, two_half_sq = _central_angle_legs(slant_range, a, c)
+            angle = np.arctan2((a - c) - a * two_half_sq, a * sine)
+        return _degenerate(angle, slant_range, a, c, 0.0)
 
 
 def _nadir_angle_kernel(slant_range, sensor_altitude, target_altitude, form):
@@ -183,6 +203,13 @@ def nadir_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="stab
 
     Notes
     -----
+    Two geometries have no triangle. At zero slant range between equal heights
+    (sensor and target coincide) the result is :math:`\pi/2`, the limit of the
+    chord's nadir angle :math:`\pi/2 - \theta/2` as the ground range goes to 0:
+    the line of sight becomes the local horizontal (pyBSM divides by zero). A
+    slant range shorter than the height difference (beyond rounding) is NaN:
+    no line of sight is that short.
+
     In the triangle (Earth centre, sensor, target) with central angle :math:`\theta`,
     the two legs of the line of sight seen from the sensor give
 
@@ -222,7 +249,9 @@ def elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="
     Returns
     -------
     float or xr.DataArray
-        Elevation angle. [rad]
+        Elevation angle; 0 at zero slant range between equal heights (the limit),
+        NaN for a slant range shorter than the height difference
+        (:func:`nadir_angle`). [rad]
     """
     out = np.pi / 2 - nadir_angle(slant_range, sensor_altitude, target_altitude, form=form)
     return named(out, "rad", "elevation angle")
@@ -256,6 +285,11 @@ def altitude_along_path(distance_from_target, slant_range, sensor_altitude, targ
     With :math:`b` the distance from the sensor and :math:`\phi` the nadir
     angle, the distance of the point from the Earth centre is
     :math:`\sqrt{a^2 + b^2 - 2ab\cos\phi}`.
+
+    At zero slant range between equal heights the path is one point and the
+    result is that height, the limit as the path shrinks (pyBSM divides by zero
+    in its nadir angle). A slant range shorter than the height difference is
+    NaN (:func:`nadir_angle`).
     """
     _check_form(form)
     out = apply_kernel(_altitude_along_path_kernel, sensor_altitude, slant_range,
@@ -317,7 +351,9 @@ def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *,
     Returns
     -------
     float or xr.DataArray
-        Elevation angle seen from the target; 0 at the geometric horizon. [rad]
+        Elevation angle seen from the target; 0 at the geometric horizon, and at
+        zero slant range between equal heights (the limit: the chord becomes the
+        horizon); NaN for a slant range shorter than the height difference. [rad]
 
     Notes
     -----

@@ -617,10 +617,18 @@ def resample_spectral(values, wavelength: xr.DataArray, name: str):
     Returns
     -------
     xr.DataArray
+
+    Raises
+    ------
+    ValueError
+        If the curve has no samples.
     """
     dim = f"{name}_wavelength"
     if dim not in values.dims:
         return values
+    if values.sizes[dim] == 0:
+        raise ValueError(f"{name} is an empty curve: give at least one sample over "
+                         f"'{dim}' (or a scalar)")
     out = xr.apply_ufunc(
         _interp_kernel, values, wavelength, kwargs={"source": values[dim].values},
         input_core_dims=[[dim], ["wavelength"]], output_core_dims=[["wavelength"]],

@@ -33,7 +33,15 @@ from ._edge_fit import (
     phase_rows,
     polarity,
 )
-from ._image import as_image, finite_values, lead_coords, select, units_of
+from ._image import (
+    as_image,
+    finite_values,
+    flag,
+    flags_variable,
+    lead_coords,
+    select,
+    units_of,
+)
 
 __all__ = [
     "MAX_EDGE_ANGLE",
@@ -57,6 +65,13 @@ WINDOWS = ("hamming", None)
 
 METHODS = ("accurate", "iso")
 """Numerics of :func:`slanted_edge_mtf`: ISO 12233's, or with its binning errors removed."""
+
+CLIPPED_ROW_FRACTION = 0.5
+"""Fraction of rows with an extreme pixel inside the edge's rise that flags clipping."""
+
+CLIP_MARGIN = 0.5
+"""Distance beyond the edge's 10-90 % rise still searched for clipped pixels (half a
+pixel: a pixel straddling the end of the rise). [pixel]"""
 
 
 def _check_knobs(oversampling, window, method):
@@ -141,6 +156,31 @@ def _mtf_from_esf(esf, sign, oversampling, window, method):
     return frequency, mtf, lsf * oversampling / lsf.sum()
 
 
+def _rise(esf, oversampling):
+    """Width of the edge's 10-90 % rise [px], from the ESF's outer-quarter levels; >= 1."""
+    quarter = max(1, esf.size // 4)
+    low, high = esf[:quarter].mean(), esf[-quarter:].mean()
+    level = (esf - low) / (high - low)
+    return max(1.0, np.count_nonzero((level > 0.1) & (level < 0.9)) / oversampling)
+
+
+def _clipped(img, intercept, slope, rise):
+    """Whether clipping reaches into the edge.
+
+    It does if in at least half of the rows a pixel within ``rise`` + :data:`CLIP_MARGIN`
+    of the fitted edge sits at the region's minimum or maximum.
+
+    An unclipped edge approaches its plateaus smoothly, so its extreme values lie far
+    from the edge (or are single noise peaks); a clipped one reaches them inside the rise.
+    """
+    rows = phase_rows(img.shape[0], slope)
+    edge_x = intercept + slope * np.arange(img.shape[0])[rows, None]
+    near = np.abs(np.arange(img.shape[1]) - edge_x) / np.hypot(1.0, slope) <= rise + CLIP_MARGIN
+    part = img[rows]
+    extreme = (part == img.max()) | (part == img.min())
+    return bool(np.mean((near & extreme).any(axis=1)) >= CLIPPED_ROW_FRACTION)
+
+
 def _measure_one(img, oversampling, window, method):
     """Every slanted-edge result of one 2-D image (plain numpy)."""
     img, vertical = orient(img)
@@ -150,8 +190,10 @@ def _measure_one(img, oversampling, window, method):
     distance, esf, empty, total = _binned_esf(img, intercept, slope, oversampling, method)
     _check_bins(empty, total, angle, oversampling)
     frequency, mtf, lsf = _mtf_from_esf(esf, sign, oversampling, window, method)
+    clipped = _clipped(img, intercept, slope, _rise(esf, oversampling))
     return {"frequency": frequency, "distance": distance, "mtf": mtf, "esf": esf,
-            "lsf": lsf, "edge_angle": angle, "vertical_edge": vertical}
+            "lsf": lsf, "edge_angle": angle, "vertical_edge": vertical,
+            "flags": flag("edge_clipped") if clipped else 0}
 
 
 # ---- public functions ---------------------------------------------------------------
@@ -185,6 +227,8 @@ def _edge_dataset(results, image, shape, knobs):
                                "angle between the edge and the nearer pixel axis"),
         "vertical_edge": variable("vertical_edge", (), "1",
                                   "edge nearer the y axis (edge spread measured along x)"),
+        "flags": flags_variable(_stacked(results, "flags", shape), lead, coords,
+                                "slanted-edge validity flags"),
     }, coords={"frequency": frequency, "distance": distance})
     out["rer"] = edge_rer(out["esf"])
     out.attrs = {"method": "slanted edge ({}), oversampling {}, window {}".format(*knobs),
@@ -206,7 +250,9 @@ def slanted_edge_mtf(image, *, roi=None, oversampling=4, window="hamming",
         transposed. Values linear in exposure. [any]
     roi : tuple of two slices or dict, optional
         Region of interest by position: ``(rows, columns)`` or
-        ``{"y": slice, "x": slice}``; at least :data:`MIN_SIZE` pixels each way.
+        ``{"y": slice, "x": slice}``; at least :data:`MIN_SIZE` pixels each way, with
+        unit steps (a strided region, or a strided view of an image whose ``y`` / ``x``
+        coordinates count pixels, is refused: it is a decimated image).
     oversampling : int
         Bins per pixel of the edge spread function (ISO: 4). [1]
     window : {"hamming", None}
@@ -221,7 +267,9 @@ def slanted_edge_mtf(image, *, roi=None, oversampling=4, window="hamming",
         ``mtf`` over ``frequency`` [cycles/pixel along the edge normal], from 0 to
         ``oversampling / 2``; ``esf`` (image units) and ``lsf`` (unit area)
         [pixel-1] over ``distance`` from the edge [pixel]; ``edge_angle``
-        [degree]; ``vertical_edge``; ``rer`` (:func:`edge_rer`) [1].
+        [degree]; ``vertical_edge``; ``rer`` (:func:`edge_rer`) [1]; ``flags``
+        (:data:`xbsm.measure.FLAGS`: ``edge_clipped``, the edge clipped inside its rise, which
+        sharpens it and raises the MTF).
 
     Notes
     -----

@@ -37,15 +37,89 @@ __all__ = ["simulate_image"]
 CHANNEL_DIMS = ("band", "channel", "colour", "color")
 """Dimension names taken as an image's colour channel (percentiles span every channel)."""
 INPUT_DIMS = ("y_input", "x_input")
+RESULT_VARIABLES = ("reflectance", "ideal", "blurred", "noisy", "counts", "psf", "gsd",
+                    "gsd_x", "gsd_y", "slant_range", "scale_y", "scale_x", "offset_y",
+                    "offset_x", "size_y", "size_x", "photoelectron_offset",
+                    "photoelectron_gain", "effective_integration_time", "flags")
+"""The variables of a :func:`simulate_image` result."""
+RESERVED_IMAGE_DIMS = (*INPUT_DIMS, "psf_y", "psf_x", *RESULT_VARIABLES)
+"""Names an image's other dims may not take: the result's own dims and variables."""
+IMAGE_OUTPUTS = ("reflectance", "ideal", "blurred", "noisy", "counts", "psf")
+"""The image-sized variables ``outputs=`` chooses from (the rest are always kept)."""
+
+
+def _check_outputs(outputs):
+    if outputs is None:
+        return IMAGE_OUTPUTS
+    chosen = (outputs,) if isinstance(outputs, str) else tuple(outputs)
+    if not chosen or any(o not in IMAGE_OUTPUTS for o in chosen):
+        raise ValueError(f"outputs must be a non-empty selection of {IMAGE_OUTPUTS}; "
+                         f"got {outputs!r}")
+    return chosen
+
+
+def _counts_fill(counts_dtype, sensor):
+    """The integer dtype of the counts and its fill value (its maximum), or (None, None)."""
+    if counts_dtype is None:
+        return None, None
+    try:
+        dtype = np.dtype(counts_dtype)
+    except TypeError:
+        dtype = None
+    if dtype is None or dtype.kind != "u":
+        raise ValueError("counts_dtype must be an unsigned integer dtype ('uint8', 'uint16', "
+                         f"'uint32', 'uint64') or None (float64); got {counts_dtype!r}")
+    fill = np.iinfo(dtype).max
+    top = float(np.max(2.0 ** sensor["bit_depth"].values - 1.0))
+    if not top < fill:
+        raise ValueError(f"counts_dtype {dtype.name} holds 0 to {fill - 1} ({fill} marks "
+                         f"cells without a count); the sensor's bit_depth gives counts up to "
+                         f"{top:.0f}: choose a wider dtype")
+    return dtype, fill
+
+
+def _integer_counts_kernel(counts, *, dtype, fill):
+    return np.where(np.isfinite(counts), counts, fill).astype(dtype)
+
+
+def _integer_counts(counts, dtype, fill):
+    """The counts in an unsigned integer dtype, ``fill`` (the ``_FillValue``) where NaN."""
+    out = xr.apply_ufunc(_integer_counts_kernel, counts, kwargs={"dtype": dtype, "fill": fill},
+                         dask="parallelized", output_dtypes=[dtype]).assign_attrs(counts.attrs)
+    out.encoding["_FillValue"] = dtype.type(fill)
+    return out
+
+
+ALPHA_LABELS = ("a", "alpha")
+"""Labels (any case) of a colour channel that is opacity, dropped from the simulation."""
+
+
+def _drop_alpha(image, channel_dim):
+    """The image without its alpha channel (labelled "A" or "alpha"), and whether it had one."""
+    if channel_dim is None or channel_dim not in image.coords:
+        return image, False
+    keep = [str(label).lower() not in ALPHA_LABELS for label in image[channel_dim].values]
+    if all(keep):
+        return image, False
+    if not any(keep):
+        raise ValueError(f"image has only an alpha channel along {channel_dim!r}; give its "
+                         "colour channels")
+    return image.isel({channel_dim: np.flatnonzero(keep)}), True
 
 
 def _as_image(image, channel_dim):
-    """The reference image as a float DataArray over (..., y_input, x_input)."""
+    """The reference image as a float DataArray over (..., y_input, x_input).
+
+    Also the colour channel's dim (or None) and whether an alpha channel was dropped: the
+    fourth channel of a (rows, columns, 4) array, a channel labelled "A" or "alpha".
+    """
+    alpha = False
     if isinstance(image, np.ndarray):
         if image.ndim == 2:
             image = xr.DataArray(image, dims=("y", "x"))
         elif image.ndim == 3 and image.shape[-1] in (3, 4):
-            image = xr.DataArray(image, dims=("y", "x", "band"))
+            alpha = image.shape[-1] == 4  # RGBA: opacity is not a colour band
+            image = xr.DataArray(image[..., :3], dims=("y", "x", "band"))
         else:
             raise ValueError("image must be 2-D (rows, columns), 3-D (rows, columns, 3 or 4 "
                              f"channels) or a DataArray with dims 'y' and 'x'; got shape "
@@ -55,14 +129,23 @@ def _as_image(image, channel_dim):
                          f"array; got {type(image).__name__}")
     if "y" not in image.dims or "x" not in image.dims:
         raise ValueError(f"image must have dims 'y' (rows) and 'x' (columns); got {image.dims}")
+    if image.sizes["y"] == 0 or image.sizes["x"] == 0:
+        raise ValueError("image must have at least one pixel along 'y' and 'x'; got "
+                         f"{image.sizes['y']} x {image.sizes['x']}")
+    reserved = [d for d in image.dims if d in RESERVED_IMAGE_DIMS]
+    if reserved:
+        raise ValueError(f"image has a dimension {reserved[0]!r}, a name simulate_image uses "
+                         f"itself; rename it (reserved: {', '.join(RESERVED_IMAGE_DIMS)})")
     if image.dtype.kind not in "biuf":
         raise ValueError(f"image must hold real numbers; got dtype {image.dtype}")
     if channel_dim is None:
         channel_dim = next((d for d in CHANNEL_DIMS if d in image.dims), None)
     elif channel_dim not in image.dims:
         raise ValueError(f"channel_dim {channel_dim!r} is not a dim of the image {image.dims}")
+    image, labelled_alpha = _drop_alpha(image, channel_dim)
     image = image.rename(y="y_input", x="x_input").astype(float)
-    return image.drop_vars([c for c in image.coords if c in INPUT_DIMS]), channel_dim
+    return (image.drop_vars([c for c in image.coords if c in INPUT_DIMS]), channel_dim,
+            alpha or labelled_alpha)
 
 
 def _reference_gsd(image, gsd):
@@ -180,8 +263,9 @@ def _pixel_coords(ds: xr.Dataset) -> xr.Dataset:
     return ds.assign_coords(coords)
 
 
-def _assemble(images: dict, samp, radiometry, psf, flags, im: ImageMethod, attrs: dict):
-    """The result Dataset: images, kernel, pixel map and flags, each labelled."""
+def _assemble(images: dict, samp, radiometry, psf, flags, im: ImageMethod, attrs: dict,
+              outputs=IMAGE_OUTPUTS):
+    """The result Dataset: images (those of ``outputs``), kernel, pixel map and flags."""
     count = "count"
     out = xr.Dataset({
         "reflectance": images["reflectance"],
@@ -201,13 +285,14 @@ def _assemble(images: dict, samp, radiometry, psf, flags, im: ImageMethod, attrs
         "flags": flags.astype(np.int32).assign_attrs(fl.flag_attrs(
             "image simulation validity flags")),
     }, attrs={"method": im.describe(), **attrs})
-    return _pixel_coords(out)
+    return _pixel_coords(out.drop_vars([v for v in IMAGE_OUTPUTS if v not in outputs]))
 
 
 def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None, seed=None,
                    noise=True, method="accurate", components=None, reflectance=None,
                    reflectance_range=(0.05, 0.95), convolution=None, resampling=None,
-                   basis=None, defocus_radius=None, channel_dim=None) -> xr.Dataset:
+                   basis=None, defocus_radius=None, channel_dim=None, outputs=None,
+                   counts_dtype=None) -> xr.Dataset:
     """A reference image as the camera would record it in the scenario (paper Eq. 5-6).
 
     Parameters
@@ -215,7 +300,12 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
     image : xr.DataArray or np.ndarray
         Reference image(s): dims ``y`` (rows) and ``x`` (columns), optionally a colour
         channel (``band``, ``channel``, ``colour`` or ``color``, or ``channel_dim``) and any
-        leading dims (a stack). A numpy array is (rows, columns) or (rows, columns, 3|4).
+        leading dims (a stack; not named as a dim or variable of the result,
+        :data:`RESERVED_IMAGE_DIMS`). A numpy array is (rows, columns) or
+        (rows, columns, 3|4). At least one pixel each way. An alpha channel (the
+        fourth of a (rows, columns, 4) array, or a channel labelled "A" or "alpha")
+        is dropped: it is not simulated and does not enter the reflectance mapping
+        (the result's ``alpha`` attribute says "dropped").
         Dask-backed images stay lazy. [any: pixel values, see ``reflectance``]
     sensor, scenario : xr.Dataset
         From :func:`xbsm.sensor` and :func:`xbsm.scenario`; sweep dims broadcast (the
@@ -238,13 +328,23 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         Pixel values to reflectance (:func:`xbsm.simulate.image_to_reflectance`); default
         the method's ("percentile").
     reflectance_range : (float, float)
-        Reflectances of the two pixel values of "percentile" and "minmax". [1]
+        Reflectances of the two pixel values of "percentile" and "minmax", a pair
+        ``0 <= low < high <= 1``. [1]
     convolution, resampling, basis : str, optional
         Override the method's knobs (:class:`xbsm.simulate.ImageMethod`).
     defocus_radius : float or (float, float), optional
         1/e radii of a Gaussian defocus OTF along x and y. [rad]
     channel_dim : str, optional
         The colour dim, if not one of the usual names.
+    outputs : str or sequence of str, optional
+        The image-sized variables to return, of :data:`IMAGE_OUTPUTS`; default all.
+        ``("counts",)`` for datasets; the pixel map, sizes, GSDs, radiometry and
+        ``flags`` are always kept.
+    counts_dtype : str or np.dtype, optional
+        An unsigned integer dtype for ``counts`` (``"uint16"`` for up to 16-bit
+        cameras); cells without a count (past each scenario's size, NaN photoelectrons)
+        hold the dtype's maximum, the variable's ``_FillValue`` (its ``encoding``: a
+        NetCDF file reads them back as NaN). Default float64 with NaN.
 
     Returns
     -------
@@ -260,9 +360,11 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         ``image_nonfinite``, ``image_flat``, ``reference_unresolved``).
     """
     check_inputs(sensor, scenario)
+    outputs = _check_outputs(outputs)
+    counts_dtype, fill = _counts_fill(counts_dtype, sensor)
     im = image_method(method, convolution=convolution, resampling=resampling, basis=basis,
                       reflectance=reflectance if isinstance(reflectance, str) else None)
-    img, channel = _as_image(image, channel_dim)
+    img, channel, alpha = _as_image(image, channel_dim)
     gsd = _reference_gsd(img, gsd)
     shape = (img.sizes["y_input"], img.sizes["x_input"])
     mapping = im.reflectance if reflectance is None or isinstance(reflectance, str) else reflectance
@@ -288,8 +390,11 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
                                                 samp["size_x"]) for a in (blurred, noisy))
     flags = radiometry["flags"] | samp["flags"] | psf_flags | mapped["flags"]
     _warn_upsampled(samp)
-    images.update(blurred=blurred, noisy=noisy,
-                  counts=camera.digitize(noisy, sensor, im.quantization))
-    return _assemble(images, samp, radiometry, psf, flags, im, {
+    counts = camera.digitize(noisy, sensor, im.quantization)
+    if counts_dtype is not None:
+        counts = _integer_counts(counts, counts_dtype, fill)
+    images.update(blurred=blurred, noisy=noisy, counts=counts)
+    return _assemble(images, samp, radiometry, psf, flags, im, outputs=outputs, attrs={
         "seed": str(entropy), "noise": "on" if noise else "off",
-        "components": " ".join(comps), "reference_gsd": str(gsd)})
+        "components": " ".join(comps), "reference_gsd": str(gsd),
+        **({"alpha": "dropped"} if alpha else {})})

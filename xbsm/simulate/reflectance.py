@@ -119,10 +119,14 @@ def _check_table(table):
 
 
 def _check_range(reflectance_range):
-    low, high = (float(v) for v in reflectance_range)
+    message = ("reflectance_range must be a pair (low, high) with 0 <= low < high <= 1; "
+               f"got {reflectance_range!r}")
+    try:
+        low, high = (float(v) for v in reflectance_range)
+    except (TypeError, ValueError):  # None, one value, three, not numbers
+        raise ValueError(message) from None
     if not (0.0 <= low < high <= 1.0):
-        raise ValueError("reflectance_range must be (low, high) with 0 <= low < high <= 1; "
-                         f"got {reflectance_range!r}")
+        raise ValueError(message)
     return low, high
 
 
