@@ -3,18 +3,19 @@
 The same 10^6-scenario study (ground range x altitude x focal length x visibility x
 drift rate, recipes/studies/million.toml) cut into 250, 1,000, 10,000 and 100,000
 chunks by ``[run] chunks``, and (``--chunks 937500``) the same study stretched to
-the 10^10 scenarios a study file may hold, at the default chunking. For each, ``xbsm run`` starts in a child process from
-a given checkout (``PYTHONPATH``), and the recipe records the wall time from the
-start until the first chunk file appears in ``OUT.nc.parts/`` and the child's peak
-resident memory until then (``VmHWM`` of ``/proc/PID/status``, Linux), then stops
-the child. A child that saves nothing within ``--timeout`` seconds is recorded as
-such, with its memory at that moment. Several checkouts are measured in turns, so
+the 10^10 scenarios a study file may hold, at the default chunking. For each,
+``xbsm run`` starts in a child process from a given checkout (``PYTHONPATH``), and
+the recipe records the wall time from the start until the first chunk file appears
+in ``OUT.nc.parts/`` and the child's peak resident memory until then (``VmHWM`` of
+``/proc/PID/status``, Linux), then stops the child. A child that saves nothing
+within ``--timeout`` seconds is recorded as such, with its memory at that moment.
+Several checkouts are measured in turns, so
 "before" and "after" share one run of the machine.
 
 Run from the repository root, e.g. with the issue's starting point in a worktree::
 
-    git worktree add /tmp/before 391ccfe
-    .venv/bin/python recipes/study_setup_scaling.py --checkout . --checkout /tmp/before
+    git worktree add ../before 391ccfe
+    .venv/bin/python recipes/study_setup_scaling.py --checkout . --checkout ../before
 
 Writes ``docs/benchmarks/study_setup_scaling.json``.
 """
@@ -123,8 +124,8 @@ def main():
     print(f"load average at start: {os.getloadavg()}", flush=True)
     for count in args.chunks:
         for checkout in checkouts:
-            row = {"checkout": checkout_commit(checkout), **first_chunk(checkout, count, args.timeout),
-                   "load_1min": os.getloadavg()[0]}
+            row = {"checkout": checkout_commit(checkout),
+                   **first_chunk(checkout, count, args.timeout), "load_1min": os.getloadavg()[0]}
             rows.append(row)
             print(json.dumps(row), flush=True)
     args.out.write_text(json.dumps({"machine": machine(), "commit": commit(), "rows": rows},

@@ -75,8 +75,11 @@ def transform_boxes(boxes, simulation: xr.Dataset, *, clip=False) -> xr.DataArra
     ----------
     boxes : array_like (n, 4) or xr.DataArray
         Columns (x_min, y_min, x_max, y_max), the box's edges in reference pixel
-        coordinates (pixels ``i0`` to ``i1`` inclusive span ``[i0, i1 + 1]``); a
-        DataArray needs a dim ``corner`` labelled so. [pixels]
+        coordinates. ``x_max`` and ``y_max`` are the far edges, one past the last
+        pixel: pass ``x_max = last column + 1`` and ``y_max = last row + 1`` (a box
+        over columns 10-19 and rows 5-8 is ``(10, 5, 20, 9)``; OpenCV's
+        ``(x, y, w, h)`` is ``(x, y, x + w, y + h)``). Inclusive indices make every
+        box one pixel short. A DataArray needs a dim ``corner`` labelled so. [pixels]
     simulation : xr.Dataset
         From :func:`xbsm.simulate_image`.
     clip : bool
