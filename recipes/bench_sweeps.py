@@ -316,7 +316,7 @@ def counting(counter: Counter):
     for name in dir(scipy.special):
         obj = getattr(scipy.special, name)
         if isinstance(obj, np.ufunc) and id(obj) not in targets:
-            targets[id(obj)] = (obj, f"scipy.special.{name}")
+            targets[id(obj)] = (obj, f"scipy.special.{obj.__name__}")
     for name in MATH_TRANSCENDENTAL:
         if hasattr(math, name):
             targets[id(getattr(math, name))] = (getattr(math, name), f"math.{name}")
