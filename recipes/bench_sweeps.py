@@ -542,27 +542,34 @@ def print_row(record, checkouts, methods):
 
 
 def print_summary(results):
-    """Markdown: one table per method, us per scenario and count, alone and crossed."""
+    """Markdown: us per scenario (transcendental evaluations per scenario), every checkout."""
     labels = [c["label"] for c in results["checkouts"]]
-    methods = sorted({cell["method"] for r in results["rows"] for cell in r["cells"].values()},
-                     key=lambda m: METHODS.index(m) if m in METHODS else 99)
-    for method in methods:
-        print(f"\n`{method}`: us per scenario (transcendental evaluations per scenario)\n")
-        head = "| swept | " + " | ".join(f"alone {lab} | crossed {lab}" for lab in labels)
-        print(head + " |")
-        print("|---|" + "---|" * (2 * len(labels)))
-        by_row = collections.defaultdict(dict)
-        for r in results["rows"]:
-            by_row[r["row"]][r["shape"]] = r
-        for row, shapes in by_row.items():
-            out = [ROWS[row][0]]
-            for lab in labels:
-                for shape in ("alone", "crossed"):
-                    cell = shapes.get(shape, {}).get("cells", {}).get(f"{lab}/{method}")
-                    out.append("-" if cell is None else
-                               f"{cell['us_per_scenario']:.1f} "
-                               f"({cell['transcendental_per_scenario']:,.0f})")
-            print("| " + " | ".join(out) + " |")
+    by_row = collections.defaultdict(dict)
+    for r in results["rows"]:
+        by_row[r["row"]][r["shape"]] = r
+    methods = [m for m in METHODS if any(cell["method"] == m for r in results["rows"]
+                                         for cell in r["cells"].values())]
+    print(f"\nus per scenario (transcendental evaluations per scenario), checkouts "
+          f"{' / '.join(labels)}; other CPU: cores the rest of the machine used, alone / crossed\n")
+    print("| swept | scenarios alone / crossed | " + " | ".join(
+        f"`{m}` {shape}" for m in methods for shape in ("alone", "crossed"))
+        + " | other CPU |")
+    print("|---|---|" + "---|" * (2 * len(methods)) + "---|")
+    for row, shapes in by_row.items():
+        out = [ROWS[row][0], " / ".join(f"{shapes[s]['scenarios']:,}" if s in shapes else "-"
+                                        for s in ("alone", "crossed"))]
+        for method in methods:
+            for shape in ("alone", "crossed"):
+                if shape not in shapes:
+                    out.append("-")
+                    continue
+                cells = [shapes[shape]["cells"][f"{lab}/{method}"] for lab in labels]
+                out.append(" / ".join(
+                    f"{c['us_per_scenario']:.3g} ({c['transcendental_per_scenario']:,.0f})"
+                    for c in cells))
+        out.append(" / ".join(f"{shapes[s]['other_cpu_cores']:.1f}" for s in ("alone", "crossed")
+                              if s in shapes))
+        print("| " + " | ".join(out) + " |")
 
 
 def main():
