@@ -74,6 +74,14 @@ argument, a closure or a container (``{"exp": np.exp}``) is not replaced; a
 one; values cached by earlier calls (the warm-up) are not recounted, so the
 count is the steady-state cost of one more call, which is what the time is too.
 
+To put the count in time, each child measures at the end the nanoseconds per
+element of every counted numpy / ``scipy.special`` function on 2^16 cache-resident
+values (``unit_costs``; inputs in 0.01-100, so a sine of large arguments, with its
+longer range reduction, costs more than this), and each cell gets the
+microseconds its evaluations would take at those rates: the third number in the
+summary's brackets, a floor for the evaluations as they are counted, not for the
+model.
+
 Run from the repository root with the project environment (see ``recipes/README.md``)::
 
     .venv/bin/python recipes/bench_sweeps.py [--repeats 3] [--checkout PATH ...]
@@ -370,6 +378,57 @@ def counting(counter: Counter):
             namespace[key] = value
 
 
+def unit_costs(names) -> dict:
+    """Nanoseconds per element of each counted numpy / scipy.special function.
+
+    Each on 2^16 values (cache-resident), uniform in 0.01-100 (0.01-0.99 for
+    arcsin, arccos, arctanh; power with exponent 5/3; Bessel-like functions of two
+    arguments as f(1, x)), fastest of 9 runs. ``math`` functions (scalars) and
+    integer-exponent powers are left out, as they are from the count's total.
+    """
+    import numpy as np
+    import scipy.special
+
+    rng = np.random.default_rng(0)
+    x = rng.uniform(0.01, 100.0, 2**16)
+    unit = rng.uniform(0.01, 0.99, 2**16)
+    out = {}
+    for name in names:
+        if "integer exponent" in name or name.startswith("math."):
+            continue
+        if name.startswith("scipy.special."):
+            func = getattr(scipy.special, name.split(".", 2)[2], None)
+        else:
+            func = getattr(np, name, None)
+        nin = getattr(func, "nin", None)
+        if name in ("arcsin", "arccos", "arctanh"):
+            args = (unit,)
+        elif name == "arccosh":
+            args = (x + 1.0,)
+        elif name in ("power", "float_power"):
+            args = (x, 5.0 / 3.0)
+        elif nin == 1:
+            args = (x,)
+        elif nin == 2:
+            args = (1.0, x) if name.startswith("scipy.") else (x, x)
+        else:
+            continue
+        times = []
+        with np.errstate(all="ignore"):
+            func(*args)
+            for _ in range(9):
+                t0 = time.perf_counter()
+                func(*args)
+                times.append(time.perf_counter() - t0)
+        out[name] = 1e9 * min(times) / x.size
+    return out
+
+
+def evaluation_estimate_us(counts: dict, n: int, costs: dict) -> float:
+    """Microseconds per scenario the counted evaluations take at the measured unit costs."""
+    return sum(v * costs[k] for k, v in counts.items() if k in costs) / n / 1e3
+
+
 def child():
     """Serve the parent's commands on stdin, one JSON line each, until EOF."""
     import numpy as np
@@ -402,6 +461,8 @@ def child():
                        for a, b in zip(counted, state["last"], strict=True))
             reply = {"counts": dict(counter.counts), "result_unchanged": bool(same),
                      "numba_loaded": "numba" in sys.modules}
+        elif op == "unit_costs":
+            reply = {"ns_per_element": unit_costs(cmd["names"])}
         else:
             reply = {"error": f"unknown op {op!r}"}
         print(json.dumps(reply), flush=True)
@@ -518,9 +579,20 @@ def run(args) -> dict:
                 record["load_after"] = load()
                 results["rows"].append(record)
                 print_row(record, checkouts, args.methods)
+        names = sorted({name for r in results["rows"] for cell in r["cells"].values()
+                        for name in cell["counts"]})
+        results["unit_costs_ns"] = {c.label: c.ask(op="unit_costs", names=names)[
+            "ns_per_element"] for c in checkouts}
+        for r in results["rows"]:
+            for cell in r["cells"].values():
+                cell["evaluation_estimate_us"] = evaluation_estimate_us(
+                    cell["counts"], r["scenarios"], results["unit_costs_ns"][cell["checkout"]])
     finally:
         for c in checkouts:
             c.close()
+    for label, costs in results["unit_costs_ns"].items():
+        print(f"ns per element, {label}: " + ", ".join(
+            f"{k} {v:.2g}" for k, v in sorted(costs.items(), key=lambda kv: -kv[1])))
     results["load_end"] = load()
     print(f"load average at end: {results['load_end']}", flush=True)
     return results
@@ -549,7 +621,8 @@ def print_summary(results):
         by_row[r["row"]][r["shape"]] = r
     methods = [m for m in METHODS if any(cell["method"] == m for r in results["rows"]
                                          for cell in r["cells"].values())]
-    print(f"\nus per scenario (transcendental evaluations per scenario), checkouts "
+    print(f"\nus per scenario (transcendental evaluations per scenario; the us they take at "
+          f"the measured ns per element), checkouts "
           f"{' / '.join(labels)}; other CPU: cores the rest of the machine used, alone / crossed\n")
     print("| swept | scenarios alone / crossed | " + " | ".join(
         f"`{m}` {shape}" for m in methods for shape in ("alone", "crossed"))
@@ -565,8 +638,8 @@ def print_summary(results):
                     continue
                 cells = [shapes[shape]["cells"][f"{lab}/{method}"] for lab in labels]
                 out.append(" / ".join(
-                    f"{c['us_per_scenario']:.3g} ({c['transcendental_per_scenario']:,.0f})"
-                    for c in cells))
+                    f"{c['us_per_scenario']:.3g} ({c['transcendental_per_scenario']:,.0f}; "
+                    f"{c.get('evaluation_estimate_us', float('nan')):.2g})" for c in cells))
         out.append(" / ".join(f"{shapes[s]['other_cpu_cores']:.1f}" for s in ("alone", "crossed")
                               if s in shapes))
         print("| " + " | ".join(out) + " |")
