@@ -61,7 +61,9 @@ equal the timed call's bit for bit (else the row says so). The method:
 - only the outermost counted operation counts (``np.exp`` of a DataArray is
   one evaluation per element, not one for xarray's call and one for numpy's);
 - powers with an integer-valued scalar exponent (``x**2``, ``x**3``) are
-  multiplications, listed apart and not in the total.
+  multiplications, listed apart and not in the total;
+- each count is also filed under the innermost ``xbsm`` module on the call stack
+  (``counts_by_module`` in the JSON), which says which stage evaluates what.
 
 Its blind spots: evaluations inside compiled code (a numba or C kernel, numpy's
 own C functions such as FFT twiddles, ``np.interp``, ``np.linalg``, a ufunc's
@@ -197,6 +199,7 @@ class Counter:
 
     def __init__(self):
         self.counts = collections.Counter()
+        self.by_module = collections.Counter()  # (innermost xbsm module on the stack, name)
         self.local = threading.local()
         self.lock = threading.Lock()
 
@@ -213,8 +216,17 @@ class Counter:
         import numpy as np
 
         first = out[0] if isinstance(out, tuple) else out
+        frame, module = sys._getframe(1), "(outside xbsm)"
+        while frame is not None:
+            owner = frame.f_globals.get("__name__", "")
+            if owner == "xbsm" or owner.startswith("xbsm."):
+                module = owner
+                break
+            frame = frame.f_back
+        size = int(np.size(first))
         with self.lock:
-            self.counts[name] += int(np.size(first))
+            self.counts[name] += size
+            self.by_module[module, name] += size
 
     def power(self, base, exponent, out, name="power"):
         import numpy as np
@@ -459,7 +471,11 @@ def child():
                 counted = run_cell(state["pairs"], state["method"])
             same = all(np.array_equal(a, b, equal_nan=True)
                        for a, b in zip(counted, state["last"], strict=True))
-            reply = {"counts": dict(counter.counts), "result_unchanged": bool(same),
+            by_module = collections.defaultdict(dict)
+            for (module, name), value in counter.by_module.items():
+                by_module[module][name] = value
+            reply = {"counts": dict(counter.counts), "counts_by_module": by_module,
+                     "result_unchanged": bool(same),
                      "numba_loaded": "numba" in sys.modules}
         elif op == "unit_costs":
             reply = {"ns_per_element": unit_costs(cmd["names"])}
