@@ -629,6 +629,10 @@ def print_row(record, checkouts, methods):
           f"{record['other_cpu_cores']:.2f} cores | " + " | ".join(cells), flush=True)
 
 
+def _us(value: float) -> str:
+    return f"{value:,.0f}" if value >= 100 else f"{value:.1f}"
+
+
 def print_summary(results):
     """Markdown: us per scenario (transcendental evaluations per scenario), every checkout."""
     labels = [c["label"] for c in results["checkouts"]]
@@ -654,8 +658,8 @@ def print_summary(results):
                     continue
                 cells = [shapes[shape]["cells"][f"{lab}/{method}"] for lab in labels]
                 out.append(" / ".join(
-                    f"{c['us_per_scenario']:.3g} ({c['transcendental_per_scenario']:,.0f}; "
-                    f"{c.get('evaluation_estimate_us', float('nan')):.2g})" for c in cells))
+                    f"{_us(c['us_per_scenario'])} ({c['transcendental_per_scenario']:,.0f}; "
+                    f"{_us(c.get('evaluation_estimate_us', float('nan')))})" for c in cells))
         out.append(" / ".join(f"{shapes[s]['other_cpu_cores']:.1f}" for s in ("alone", "crossed")
                               if s in shapes))
         print("| " + " | ".join(out) + " |")
