@@ -34,10 +34,14 @@ def machine() -> dict:
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def commit() -> dict:
-    """The commit measured, and which files under xbsm/ differed from it."""
+def commit(root: Path | str = ROOT) -> dict:
+    """The commit measured, and which files under xbsm/ differed from it.
+
+    ``root`` is the checkout (default: the one this recipe belongs to); a benchmark
+    that times another checkout side by side records that checkout's commit.
+    """
     def git(*args):
-        proc = subprocess.run(["git", "-C", str(ROOT), *args], capture_output=True, text=True)
+        proc = subprocess.run(["git", "-C", str(root), *args], capture_output=True, text=True)
         return proc.stdout.strip() if proc.returncode == 0 else None
 
     changed = [line[3:] for line in (git("status", "--porcelain", "--", "xbsm") or "").splitlines()]
