@@ -341,7 +341,7 @@ def write(result: xr.Dataset, path, *, overwrite: bool = False, scheduler: str =
             _parts.prepare(parts, print_, say)
         except OSError as err:
             raise StudyError(f"cannot write to {path.parent}: {err.strerror or err}") from None
-        done = _parts.verified(parts, grid.indices(), print_, say)
+        done = _parts.verified(parts, print_, say)
         missing = [index for index in grid.indices() if index not in done]
         if progress:
             say(f"{len(done)} of {grid.count} chunks already done; computing {len(missing)} "
