@@ -12,6 +12,9 @@ function's docstring as the ``long_name`` (the rule in :mod:`xbsm.otf`).
 
 from __future__ import annotations
 
+from types import MappingProxyType
+from typing import NamedTuple
+
 import xarray as xr
 
 from ._kernels import dataset
@@ -67,3 +70,37 @@ def result(variables: dict, method, **attrs) -> xr.Dataset:
     ds = dataset({k: v for k, v in variables.items() if k not in dims})
     ds.attrs = attrs
     return ds.drop_vars([c for c in ds.coords if ds[c].ndim == 0 and c not in ds.dims])
+
+
+class Output(NamedTuple):
+    """One named array a stage's array orchestrator returns, declared beside it.
+
+    ``dims`` are the output's own dims (those of a single eager scenario, e.g.
+    ``("wavelength",)``); ``carries`` names the inputs whose sweep dims the output
+    keeps (``"sensor"``, ``"scenario"``): an output that carries only the sensor keeps
+    only sensor dims in a sweep.
+    """
+
+    name: str
+    units: str
+    long_name: str
+    dims: tuple = ()
+    carries: tuple = ("sensor", "scenario")
+    references: str | None = None
+
+    def attrs(self) -> dict:
+        """The CF attributes of the output."""
+        out = {"units": self.units, "long_name": self.long_name}
+        if self.references is not None:
+            out["references"] = self.references
+        return out
+
+
+def outputs(*declared: Output) -> MappingProxyType:
+    """A stage's declared outputs by name, in the order it returns them."""
+    return MappingProxyType({o.name: o for o in declared})
+
+
+def declared(out, output: Output):
+    """``out`` labelled with the CF attributes of its declaration."""
+    return named(out, **output.attrs())
