@@ -29,7 +29,7 @@ import xarray as xr
 
 from . import flags as fl
 from . import geometry, noise, params, quadrature, radiometry
-from ._metadata import Output, declared, outputs, result
+from ._metadata import Output, dataset_of, declared, outputs, result
 from .atmosphere import WAVELENGTH_ATTRS, band_atmosphere, band_atmosphere_arrays
 from .metrics import edge as edge_
 from .metrics import giqe as giqe_
@@ -412,4 +412,4 @@ class Direct:
         if "niirs" in variables:
             coords["giqe"] = xr.Variable("giqe", list(giqe_.GIQE_VERSIONS),
                                          dict(giqe_.GIQE_VERSION_ATTRS))
-        return xr.Dataset(variables, coords=coords, attrs={"method": m.describe(), **attrs})
+        return dataset_of(variables, coords, {"method": m.describe(), **attrs})
