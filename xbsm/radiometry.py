@@ -652,13 +652,8 @@ def aperture_radiances(atmosphere: xr.Dataset, scenario: xr.Dataset, targets: st
     target, background : xr.DataArray
         [W m-2 sr-1 m-1]
     """
-    if targets == "giqe":
-        emissive = is_emissive_band(float(wavelength_min))
-        return tuple(giqe_radiance(atmosphere, standard, emissive, constants)
-                     for standard in (GIQE_TARGET, GIQE_BACKGROUND))
-    return tuple(total_radiance(atmosphere, scenario[f"{surface}_reflectance"],
-                                scenario[f"{surface}_temperature"], constants)
-                 for surface in ("target", "background"))
+    return tuple(total_radiance(atmosphere, reflectance, temperature, constants)
+                 for reflectance, temperature in _surfaces(targets, wavelength_min, scenario))
 
 
 def sensor_band_terms(sensor: xr.Dataset, wavelength: xr.DataArray,
