@@ -149,3 +149,18 @@ def test_declared_outputs_keep_only_the_sweep_dims_they_carry():
                 assert dim not in out[name].dims, (name, out[name].dims)
                 checked += 1
     assert checked >= 6
+
+
+def test_dataset_of_equals_the_public_constructor():
+    """The direct applier's Dataset constructor gives what ``xr.Dataset`` gives."""
+    from xbsm._metadata import dataset_of
+
+    wavelength = np.linspace(0.5e-6, 0.6e-6, 5)
+    variables = {"a": xr.Variable((), 1.0, {"units": "1"}),
+                 "b": xr.Variable("wavelength", wavelength * 2, {"units": "m"})}
+    coords = {"wavelength": xr.Variable("wavelength", wavelength, {"units": "m"})}
+    got = dataset_of(variables, coords, {"method": "accurate"})
+    expected = xr.Dataset(variables, coords=coords, attrs={"method": "accurate"})
+    xr.testing.assert_identical(got, expected)
+    assert list(got.variables) == list(expected.variables)
+    assert got.indexes["wavelength"].equals(expected.indexes["wavelength"])
