@@ -282,6 +282,7 @@ class Labelled:
         return quadrature.edge_nodes(cutoff, ifov_x, ifov_y, **m.edge_quadrature_knobs())
 
     def system_slices(self, nodes, atm, spectral_weights, integration_time, slant_range, m):
+        # the weights carry their wavelengths; ``atm`` is for the direct applier's arrays
         return system.system_components(
             self.sensor, self.scenario, nodes, spectral_weights=system.otf_weights(
                 spectral_weights), integration_time=integration_time,
