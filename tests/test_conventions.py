@@ -103,7 +103,8 @@ EXPECTED_UNITS = MappingProxyType({
     "stacked_snr": "1",
     # quadrature
     "nodes": "cycles/rad", "weights": "cycles/rad", "sine_frequency": "cycles/rad",
-    "cutoff_wavelength": "m", "optics_cutoff": "cycles/rad",
+    "cutoff_wavelength": "m", "optics_cutoff": "cycles/rad", "band_cutoff": "cycles/rad",
+    "rer_unfiltered_x": "1", "rer_unfiltered_y": "1",
     "samples_per_oscillation": "1",
     # OTFs [1] and their helpers
     "aperture": "1", "turbulence": "1", "detector": "1", "jitter": "1", "drift": "1",
@@ -152,6 +153,15 @@ NOT_LABELLED = MappingProxyType({
     "xbsm.quadrature.undersampled": "returns a boolean mask that feeds a flag",
     "xbsm.metrics.giqe.giqe_calibrations": "returns a table of calibrations",
     "xbsm.otf.system.spectral_bins": "internal binning of the polychromatic OTF",
+    **{f"xbsm.{name}": "a stage's array orchestrator: plain arrays in and out, labelled by "
+       "xbsm._chain from the stage's declared outputs (tests/test_chain.py)"
+       for name in ("atmosphere.band_atmosphere_arrays", "geometry.viewing_arrays",
+                    "noise.noise_arrays", "noise.noise_gain_arrays",
+                    "quadrature.band_cutoff_arrays", "quadrature.edge_rule_arrays",
+                    "quadrature.undersampled_arrays", "radiometry.radiance_arrays",
+                    "radiometry.sensor_band_arrays", "radiometry.signal_arrays",
+                    "metrics.edge.slice_terms_arrays", "metrics.giqe.giqe_arrays",
+                    "metrics.giqe.sampling_q_arrays", "otf.system.system_slice_arrays")},
 })
 """Public functions whose result is not a labelled quantity, with the reason."""
 
@@ -209,6 +219,15 @@ def _edge_slice():
     nodes, weights = _quadrature()
     otf = aperture.circular_aperture(nodes, 0.0 * nodes, 0.55e-6, 0.275)
     return otf, weights
+
+
+def _system_slices():
+    """The x and y slices of an aperture OTF at the quadrature nodes, unfiltered and ifov."""
+    otf, weights = _edge_slice()
+    orientation = xr.DataArray(["x", "y"], dims="orientation")
+    slices = xr.concat([otf, otf], dim=orientation)
+    ifov = xr.DataArray([2e-6, 3e-6], dims="orientation", coords={"orientation": orientation})
+    return slices, None, ifov, weights
 
 
 def _psf_input():
@@ -324,6 +343,8 @@ def _cases():
         "cutoff_wavelength": lambda: quadrature.cutoff_wavelength(
             _band()["wavelength"], 0.7, 0.5),
         "optics_cutoff": lambda: quadrature.optics_cutoff(0.275, _band()["wavelength"], 0.7, 0.5),
+        "band_cutoff": lambda: quadrature.band_cutoff(0.275, _band()["wavelength"], 0.7, 0.5,
+                                                      0.5e-6),
         # metrics
         "edge_response": lambda: metrics.edge_response(
             _edge_slice()[0], 2e-6, xr.DataArray([0.0, 1.0], dims="position"), _edge_slice()[1]),
@@ -332,6 +353,7 @@ def _cases():
         "edge_height_overshoot": lambda: metrics.edge_height_overshoot(
             _edge_slice()[0], 2e-6, _edge_slice()[1]),
         "edge_terms": lambda: metrics.edge_terms(_edge_slice()[0], 2e-6, _edge_slice()[1]),
+        "slice_terms": lambda: metrics.edge.slice_terms(*_system_slices(), "real"),
         "ground_resolved_distance": lambda: metrics.ground_resolved_distance(
             _edge_slice()[0], xr.DataArray([10.0, 50.0], dims="snr"), 2e-6, 20e3),
         "giqe3": lambda: metrics.giqe3(rer=0.35, gsd=0.5, eho=1.0, snr=50.0),

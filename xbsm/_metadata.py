@@ -12,7 +12,11 @@ function's docstring as the ``long_name`` (the rule in :mod:`xbsm.otf`).
 
 from __future__ import annotations
 
+from types import MappingProxyType
+from typing import NamedTuple
+
 import xarray as xr
+from xarray.indexes import PandasIndex
 
 from ._kernels import dataset
 
@@ -67,3 +71,59 @@ def result(variables: dict, method, **attrs) -> xr.Dataset:
     ds = dataset({k: v for k, v in variables.items() if k not in dims})
     ds.attrs = attrs
     return ds.drop_vars([c for c in ds.coords if ds[c].ndim == 0 and c not in ds.dims])
+
+
+class Output(NamedTuple):
+    """One named array a stage's array orchestrator returns, declared beside it.
+
+    ``dims`` are the output's own dims (those of a single eager scenario, e.g.
+    ``("wavelength",)``); ``carries`` names the inputs whose sweep dims the output
+    keeps (``"sensor"``, ``"scenario"``): an output that carries only the sensor keeps
+    only sensor dims in a sweep.
+    """
+
+    name: str
+    units: str
+    long_name: str
+    dims: tuple = ()
+    carries: tuple = ("sensor", "scenario")
+    references: str | None = None
+
+    def attrs(self) -> dict:
+        """The CF attributes of the output."""
+        out = {"units": self.units, "long_name": self.long_name}
+        if self.references is not None:
+            out["references"] = self.references
+        return out
+
+
+def outputs(*declared: Output) -> MappingProxyType:
+    """A stage's declared outputs by name, in the order it returns them."""
+    return MappingProxyType({o.name: o for o in declared})
+
+
+def declared(out, output: Output):
+    """``out`` labelled with the CF attributes of its declaration."""
+    return named(out, **output.attrs())
+
+
+def dataset_of(variables: dict, coords: dict, attrs: dict) -> xr.Dataset:
+    """A Dataset of consistent ``xr.Variable`` objects, each dimension coordinate indexed.
+
+    ``variables`` (data) and ``coords`` (one 1-D coordinate per dimension, named after
+    it) must already agree on their dims' lengths: nothing is aligned or merged. The
+    public constructor's merge costs about 25 us per variable, most of the labelling of
+    one scenario's result, so this uses xarray's own constructor for consistent
+    variables when it has one (``tests/test_chain.py`` checks such results against the
+    labelled chain's).
+    """
+    construct = getattr(xr.Dataset, "_construct_direct", None)
+    if construct is None:
+        return xr.Dataset(variables, coords=coords, attrs=attrs)
+    every, indexes, dims = dict(variables), {}, {}
+    for name, coord in coords.items():
+        indexes[name] = PandasIndex.from_variables({name: coord}, options={})
+        every.update(indexes[name].create_variables({name: coord}))
+    for variable in every.values():
+        dims.update(zip(variable.dims, variable.shape, strict=True))
+    return construct(every, set(coords), dims, attrs, indexes)

@@ -876,6 +876,10 @@ def _spectra_of(db, scenarios, interpolation, window):
     return out.reshape(shape + (n_comp, n_wl))
 
 
+WAVELENGTH_ATTRS = MappingProxyType({"units": "m", "long_name": "wavelength",
+                                     "standard_name": "radiation_wavelength"})
+"""The attributes of the ``wavelength`` coordinate of every spectral result."""
+
 _INPUT_UNITS = MappingProxyType({"altitude": "m", "ground_range": "m", "visibility": "km"})
 
 
@@ -967,9 +971,7 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation="log-line
         # eager inputs: fail at the call, not inside the kernel
         _validate(*(np.asarray(a.values) for a in inputs), interpolation, db)
 
-    wl = xr.DataArray(wavelength, dims="wavelength",
-                      attrs={"units": "m", "long_name": "wavelength",
-                             "standard_name": "radiation_wavelength"})
+    wl = xr.DataArray(wavelength, dims="wavelength", attrs=dict(WAVELENGTH_ATTRS))
     wl = wl.assign_coords(wavelength=wl)
     *spectra, flags = apply_kernel(
         _atmosphere_kernel, *inputs, wl, core=[[], [], [], ["wavelength"]],
@@ -1068,3 +1070,28 @@ def band_atmosphere(altitude, ground_range, visibility, wavelength_min, waveleng
         atm = atm.drop_vars("flags").interp(wavelength=samples)
         atm["flags"] = band_flags
     return atm
+
+
+def band_atmosphere_arrays(altitude, ground_range, visibility, wavelength_min, wavelength_max,
+                           *, interpolation, band_edges) -> dict | None:
+    """:func:`band_atmosphere` of one eager scenario on plain arrays, or None.
+
+    Returns ``wavelength``, the spectra of :data:`VARIABLES` over it and ``flags``; None
+    for a band that spans fewer than two database wavelengths (:func:`band_atmosphere`
+    raises the error). The inputs are in the database's units and already checked.
+    """
+    samples, bounds = band_wavelengths(float(wavelength_min), float(wavelength_max),
+                                       band_edges)
+    file = str(database_path())
+    db = _load_database(file)
+    window = _wavelength_window(db.wavelength, bounds)
+    wavelength = db.wavelength[window]
+    if wavelength.size < 2:
+        return None
+    *spectra, flags = _atmosphere_kernel(altitude, ground_range, visibility, wavelength,
+                                         path=file, interpolation=interpolation, window=window)
+    if samples is not None and not np.array_equal(samples, wavelength):
+        spectra = [np.interp(samples, wavelength, s) for s in spectra]
+        wavelength = samples
+    return {"wavelength": wavelength, **dict(zip(VARIABLES, spectra, strict=True)),
+            "flags": flags}

@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 
 from ._kernels import apply_kernel, dataset
-from ._metadata import named
+from ._metadata import Output, declared, named, outputs
 from .constants import EARTH_RADIUS
 
 #: Formulas of the curved-earth triangle: "stable" (default: no cancellation near nadir or
@@ -397,11 +397,31 @@ def viewing_geometry(ground_range, altitude, pixel_pitch_x, pixel_pitch_y, focal
     altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length = as_da
     slant, angle = apply_kernel(_slant_and_elevation_kernel, altitude, ground_range,
                                 outputs=((), ()), form=form, elevation=elevation)
-    out = {"slant_range": named(slant, "m", "slant range"),
-           "elevation_angle": named(angle, "rad", "GIQE elevation angle")}
+    out = {"slant_range": slant, "elevation_angle": angle}
     for axis, pitch in (("x", pixel_pitch_x), ("y", pixel_pitch_y)):
-        pixel_angle = apply_kernel(_ratio_kernel, pitch, focal_length)
-        out[f"ifov_{axis}"] = named(pixel_angle, "rad", f"instantaneous field of view along {axis}")
-        out[f"gsd_{axis}"] = named(apply_kernel(_product_kernel, pixel_angle, slant), "m",
-                                   f"ground sample distance along {axis}")
-    return dataset(out)
+        out[f"ifov_{axis}"] = apply_kernel(_ratio_kernel, pitch, focal_length)
+        out[f"gsd_{axis}"] = apply_kernel(_product_kernel, out[f"ifov_{axis}"], slant)
+    return dataset({name: declared(out[name], o) for name, o in VIEW_OUTPUTS.items()})
+
+
+VIEW_OUTPUTS = outputs(
+    Output("slant_range", "m", "slant range", carries=("scenario",)),
+    Output("elevation_angle", "rad", "GIQE elevation angle", carries=("scenario",)),
+    Output("ifov_x", "rad", "instantaneous field of view along x", carries=("sensor",)),
+    Output("gsd_x", "m", "ground sample distance along x"),
+    Output("ifov_y", "rad", "instantaneous field of view along y", carries=("sensor",)),
+    Output("gsd_y", "m", "ground sample distance along y"),
+)
+"""What :func:`viewing_arrays` and :func:`viewing_geometry` return."""
+
+
+def viewing_arrays(altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length, *,
+                   elevation="target", form="stable") -> dict:
+    """:data:`VIEW_OUTPUTS` on plain arrays (one eager scenario; no checks)."""
+    slant, angle = _slant_and_elevation_kernel(altitude, ground_range, form=form,
+                                               elevation=elevation)
+    out = {"slant_range": slant, "elevation_angle": angle}
+    for axis, pitch in (("x", pixel_pitch_x), ("y", pixel_pitch_y)):
+        out[f"ifov_{axis}"] = _ratio_kernel(pitch, focal_length)
+        out[f"gsd_{axis}"] = _product_kernel(out[f"ifov_{axis}"], slant)
+    return out

@@ -9,7 +9,7 @@ import xarray as xr
 
 from . import radiometry
 from ._kernels import apply_kernel, dataset
-from ._metadata import named
+from ._metadata import Output, declared, named, outputs
 from .constants import CODATA
 
 # NumPy kernels (plain arrays in and out, no checks); the public functions below wrap them
@@ -162,6 +162,11 @@ def noise_gain(kernel: xr.DataArray):
     return named(out, "1", "noise gain")
 
 
+def noise_gain_arrays(kernel):
+    """:func:`noise_gain` of a plain (kernel_y, kernel_x) array."""
+    return np.sqrt(np.sum(kernel**2))
+
+
 def total_noise(shot_variance, quantization, read, other):
     """Root-sum-square of the independent noise terms.
 
@@ -232,33 +237,66 @@ def noise_terms(signal: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
     target, background = signal["target_photoelectrons"], signal["background_photoelectrons"]
     chain = (target, background, s["max_well"], s["bit_depth"], s["read_noise"], s["other_noise"])
     contrast = signal["contrast_photoelectrons"]
-    rms = "count"
-    return dataset({
-        "snr": named(apply_kernel(_snr_kernel, s["frame_stacks"], contrast, *chain), "1",
-                     "contrast signal-to-noise ratio after frame stacking"),
-        "snr_frame": named(apply_kernel(_snr_frame_kernel, contrast, *chain), "1",
-                           "single-frame contrast signal-to-noise ratio"),
-        "shot_noise": named(apply_kernel(_shot_noise_of_brighter_kernel, target, background), rms,
-                            "shot noise"),
-        "scene_noise": named(
-            apply_kernel(_scene_noise_kernel, signal["target_scene_rate"], time, tdi,
-                         signal["background_scene_rate"], signal["path_rate"]),
-            rms, "scene noise"),
-        "path_noise": named(apply_kernel(_rate_noise_kernel, signal["path_rate"], time, tdi), rms,
-                            "path radiance noise"),
-        "self_emission_noise": named(
-            apply_kernel(_rate_noise_kernel, signal["sensor_rate"], time, tdi),
-            rms, "self-emission and stray-light noise"),
-        "dark_current_noise": named(
-            apply_kernel(_dark_current_noise_kernel, tdi, s["dark_current"], time), rms,
-            "dark current noise"),
-        "quantization_noise": named(
-            apply_kernel(_quantization_noise_kernel, s["max_well"], s["bit_depth"]), rms,
-            "quantization noise"),
-        "read_noise": named(s["read_noise"], rms, "read noise"),
-        "other_noise": named(s["other_noise"], rms, "other noise"),
-        "total_noise": named(apply_kernel(_chain_total_kernel, *chain), rms, "total noise"),
-    })
+    values = {
+        "snr": apply_kernel(_snr_kernel, s["frame_stacks"], contrast, *chain),
+        "snr_frame": apply_kernel(_snr_frame_kernel, contrast, *chain),
+        "shot_noise": apply_kernel(_shot_noise_of_brighter_kernel, target, background),
+        "scene_noise": apply_kernel(_scene_noise_kernel, signal["target_scene_rate"], time, tdi,
+                                    signal["background_scene_rate"], signal["path_rate"]),
+        "path_noise": apply_kernel(_rate_noise_kernel, signal["path_rate"], time, tdi),
+        "self_emission_noise": apply_kernel(_rate_noise_kernel, signal["sensor_rate"], time, tdi),
+        "dark_current_noise": apply_kernel(_dark_current_noise_kernel, tdi, s["dark_current"],
+                                           time),
+        "quantization_noise": apply_kernel(_quantization_noise_kernel, s["max_well"],
+                                           s["bit_depth"]),
+        "read_noise": s["read_noise"],
+        "other_noise": s["other_noise"],
+        "total_noise": apply_kernel(_chain_total_kernel, *chain),
+    }
+    return dataset({name: declared(values[name], output) for name, output in OUTPUTS.items()})
+
+
+OUTPUTS = outputs(
+    Output("snr", "1", "contrast signal-to-noise ratio after frame stacking"),
+    Output("snr_frame", "1", "single-frame contrast signal-to-noise ratio"),
+    Output("shot_noise", "count", "shot noise"),
+    Output("scene_noise", "count", "scene noise"),
+    Output("path_noise", "count", "path radiance noise"),
+    Output("self_emission_noise", "count", "self-emission and stray-light noise"),
+    Output("dark_current_noise", "count", "dark current noise"),
+    Output("quantization_noise", "count", "quantization noise", carries=("sensor",)),
+    Output("read_noise", "count", "read noise", carries=("sensor",)),
+    Output("other_noise", "count", "other noise", carries=("sensor",)),
+    Output("total_noise", "count", "total noise"),
+)
+"""What :func:`noise_arrays` and :func:`noise_terms` return. [count: rms electrons]"""
+
+
+def noise_arrays(p, signal: dict) -> dict:
+    """The noise stage on plain arrays: every output of :data:`OUTPUTS`, by name.
+
+    ``p`` maps the sensor's parameters to arrays, ``signal`` the signal stage's outputs
+    (:data:`xbsm.radiometry.SIGNAL_OUTPUTS`) to arrays of one scenario.
+    """
+    time, tdi = signal["effective_integration_time"], p["tdi_stages"]
+    target, background = signal["target_photoelectrons"], signal["background_photoelectrons"]
+    chain = (target, background, p["max_well"], p["bit_depth"], p["read_noise"],
+             p["other_noise"])
+    contrast = signal["contrast_photoelectrons"]
+    return {
+        "snr": _snr_kernel(p["frame_stacks"], contrast, *chain),
+        "snr_frame": _snr_frame_kernel(contrast, *chain),
+        "shot_noise": _shot_noise_of_brighter_kernel(target, background),
+        "scene_noise": _scene_noise_kernel(signal["target_scene_rate"], time, tdi,
+                                           signal["background_scene_rate"], signal["path_rate"]),
+        "path_noise": _rate_noise_kernel(signal["path_rate"], time, tdi),
+        "self_emission_noise": _rate_noise_kernel(signal["sensor_rate"], time, tdi),
+        "dark_current_noise": _dark_current_noise_kernel(tdi, p["dark_current"], time),
+        "quantization_noise": _quantization_noise_kernel(p["max_well"], p["bit_depth"]),
+        "read_noise": p["read_noise"],
+        "other_noise": p["other_noise"],
+        "total_noise": _chain_total_kernel(*chain),
+    }
 
 
 #: The sources of the sensor's own focal-plane irradiance (paper Eq. 2), their noise

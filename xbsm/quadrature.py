@@ -451,9 +451,26 @@ def edge_nodes(cutoff, ifov_x, ifov_y, **knobs):
     return nodes_da, weights_da
 
 
+def edge_rule_arrays(cutoff, ifov_x, ifov_y, **knobs):
+    """:func:`edge_nodes` of one sensor on plain arrays: nodes, weights, sine abscissae.
+
+    ``cutoff``, ``ifov_x`` and ``ifov_y`` are 0-d; the result's arrays are 1-D over the
+    nodes.
+    """
+    knobs = {k: v for k, v in knobs.items() if k != "name"}
+    rule = knobs.pop("rule")
+    return _edge_rule(*_checked(rule, cutoff, max(ifov_x, ifov_y)), rule, **knobs)
+
+
 def _samples_per_oscillation_kernel(count, cutoff, ifov_max):
     """Nodes per period of the edge-response integrand at the farthest position (numpy)."""
     return count / (cutoff * ifov_max * MAX_POSITION)
+
+
+def undersampled_arrays(count, cutoff, ifov_x, ifov_y, threshold):
+    """:func:`undersampled` of one sensor with ``count`` nodes (plain arrays)."""
+    samples = _samples_per_oscillation_kernel(count, cutoff, max(ifov_x, ifov_y))
+    return samples < threshold
 
 
 def samples_per_oscillation(nodes, cutoff, ifov_x, ifov_y):
@@ -551,6 +568,41 @@ def optics_cutoff(aperture_diameter, wavelength: xr.DataArray, qe, transmission)
     out = _over_band(_cutoff_kernel, wavelength, qe, transmission,
                      leading=(aperture_diameter,))
     return named(out, "cycles/rad", "optics cutoff frequency D/lambda_min")
+
+
+def band_cutoff(aperture_diameter, wavelength: xr.DataArray, qe, transmission,
+                wavelength_min):
+    """:func:`optics_cutoff`, or the band's own D / lambda_min where no wavelength has signal.
+
+    A band without signal (cold_filter_transmission = 0) still gets a finite cutoff, so
+    that the edge response can be computed; its SNR is 0, flagged ``snr_nonpositive``.
+
+    Parameters
+    ----------
+    aperture_diameter : float or xr.DataArray
+        [m]
+    wavelength : xr.DataArray
+        Band wavelengths. [m]
+    qe, transmission : xr.DataArray or float
+        Quantum efficiency and optics transmission on ``wavelength``. [1]
+    wavelength_min : float or xr.DataArray
+        The band's first wavelength. [m]
+
+    Returns
+    -------
+    xr.DataArray
+        [cycles/rad]
+    """
+    cutoff = optics_cutoff(aperture_diameter, wavelength, qe, transmission)
+    return cutoff.fillna(aperture_diameter / wavelength_min)
+
+
+def band_cutoff_arrays(aperture_diameter, wavelength, qe, transmission, wavelength_min):
+    """:func:`band_cutoff` on the plain arrays of one sensor."""
+    spectral = [np.asarray(a) for a in (qe, transmission)]
+    cutoff = _cutoff_kernel(aperture_diameter, wavelength,
+                            *(a if a.ndim else a[..., np.newaxis] for a in spectral))
+    return np.where(np.isnan(cutoff), aperture_diameter / wavelength_min, cutoff)
 
 
 #: Below this RER (geometric mean) the edge-response quadrature is not converged: over 240

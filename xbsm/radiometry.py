@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from ._kernels import apply_kernel, dataset
-from ._metadata import named
+from ._metadata import Output, declared, named, outputs
 from .constants import CODATA, Constants
 
 DATABASE_REFLECTANCE = 0.15
@@ -660,13 +660,8 @@ def aperture_radiances(atmosphere: xr.Dataset, scenario: xr.Dataset, targets: st
     target, background : xr.DataArray
         [W m-2 sr-1 m-1]
     """
-    if targets == "giqe":
-        emissive = is_emissive_band(float(wavelength_min))
-        return tuple(giqe_radiance(atmosphere, standard, emissive, constants)
-                     for standard in (GIQE_TARGET, GIQE_BACKGROUND))
-    return tuple(total_radiance(atmosphere, scenario[f"{surface}_reflectance"],
-                                scenario[f"{surface}_temperature"], constants)
-                 for surface in ("target", "background"))
+    return tuple(total_radiance(atmosphere, reflectance, temperature, constants)
+                 for reflectance, temperature in _surfaces(targets, wavelength_min, scenario))
 
 
 def sensor_band_terms(sensor: xr.Dataset, wavelength: xr.DataArray,
@@ -698,14 +693,11 @@ def sensor_band_terms(sensor: xr.Dataset, wavelength: xr.DataArray,
         s["cold_filter_transmission"], s["optics_emissivity"], s["optics_temperature"],
         s["cold_filter_emissivity"], s["cold_filter_temperature"], s["stray_irradiance"]),
         wavelength=wavelength, curves=[(9, "stray_irradiance")], **_planck_knobs(constants))
-    return dataset({
-        "optics_transmission": named(optics, "1", "optics transmission on the band"),
-        "quantum_efficiency": named(
-            resample_spectral(s["quantum_efficiency"], wavelength, "quantum_efficiency"),
-            "1", "quantum efficiency on the band"),
-        "sensor_irradiance": named(sensor_irradiance, "W m-2 m-1",
-                                   "self-emission and stray focal-plane spectral irradiance"),
-    })
+    values = {"optics_transmission": optics,
+              "quantum_efficiency": resample_spectral(s["quantum_efficiency"], wavelength,
+                                                      "quantum_efficiency"),
+              "sensor_irradiance": sensor_irradiance}
+    return dataset({name: declared(values[name], o) for name, o in BAND_OUTPUTS.items()})
 
 
 def detector_irradiance(radiance, band: xr.Dataset, sensor: xr.Dataset):
@@ -780,24 +772,97 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
         wavelength=wavelength, spectral=(False,), **knobs)
     own = _apply(_rate_kernel, (*detector[:4], band["sensor_irradiance"]),
                  wavelength=wavelength, spectral=(False,), **knobs)
-    return dataset({
-        **{name: named(value, units, long_name) for value, (name, units, long_name) in zip(
-            counts, _COUNT_TERMS, strict=True)},
-        "spectral_weights": named(spectral, "s-1 m-1", "target spectral photoelectron rate"),
-        "path_rate": named(path, "s-1", "path radiance photoelectron rate"),
-        "target_scene_rate": named(target_scene, "s-1",
-                                   "target scene and path photoelectron rate"),
-        "background_scene_rate": named(background_scene, "s-1",
-                                       "background scene and path photoelectron rate"),
-        "sensor_rate": named(own, "s-1", "self-emission and stray photoelectron rate"),
-    })
+    values = {**dict(zip(_COUNT_NAMES, counts, strict=True)), "spectral_weights": spectral,
+              "path_rate": path, "target_scene_rate": target_scene,
+              "background_scene_rate": background_scene, "sensor_rate": own}
+    return dataset({name: declared(values[name], o) for name, o in SIGNAL_OUTPUTS.items()})
 
 
-_COUNT_TERMS = (
-    ("target_photoelectrons", "count", "target photoelectrons"),
-    ("background_photoelectrons", "count", "background photoelectrons"),
-    ("contrast_photoelectrons", "count", "contrast photoelectrons"),
-    ("effective_integration_time", "s", "integration time after the well-fill limit"),
-    ("well_fill_scale", "1", "well-fill integration time scale"),
+BAND_OUTPUTS = outputs(
+    Output("optics_transmission", "1", "optics transmission on the band", ("wavelength",),
+           ("sensor",)),
+    Output("quantum_efficiency", "1", "quantum efficiency on the band", ("wavelength",),
+           ("sensor",)),
+    Output("sensor_irradiance", "W m-2 m-1",
+           "self-emission and stray focal-plane spectral irradiance", ("wavelength",),
+           ("sensor",)),
 )
-"""Name, units and long name of each output of :func:`_counts_kernel`."""
+"""What :func:`sensor_band_arrays` and :func:`sensor_band_terms` return."""
+
+SIGNAL_OUTPUTS = outputs(  # the first five in the order _counts_kernel returns them
+    Output("target_photoelectrons", "count", "target photoelectrons"),
+    Output("background_photoelectrons", "count", "background photoelectrons"),
+    Output("contrast_photoelectrons", "count", "contrast photoelectrons"),
+    Output("effective_integration_time", "s", "integration time after the well-fill limit"),
+    Output("well_fill_scale", "1", "well-fill integration time scale"),
+    Output("spectral_weights", "s-1 m-1", "target spectral photoelectron rate", ("wavelength",)),
+    Output("path_rate", "s-1", "path radiance photoelectron rate"),
+    Output("target_scene_rate", "s-1", "target scene and path photoelectron rate"),
+    Output("background_scene_rate", "s-1", "background scene and path photoelectron rate"),
+    Output("sensor_rate", "s-1", "self-emission and stray photoelectron rate",
+           carries=("sensor",)),
+)
+"""What :func:`signal_arrays` and :func:`signal_terms` return."""
+_COUNT_NAMES = tuple(SIGNAL_OUTPUTS)[:5]
+
+
+# ---- the stage on plain arrays (one eager scenario; xbsm._chain's direct applier) ----
+
+def _surfaces(targets: str, wavelength_min, scenario) -> list:
+    """Reflectance and temperature of target and background (``aperture_radiances``' rule)."""
+    if targets == "giqe":
+        emissive = is_emissive_band(float(wavelength_min))
+        return [(0.0 if emissive else standard["reflectance"], standard["temperature"])
+                for standard in (GIQE_TARGET, GIQE_BACKGROUND)]
+    return [(scenario[f"{s}_reflectance"], scenario[f"{s}_temperature"])
+            for s in ("target", "background")]
+
+
+def radiance_arrays(atm, targets: str, wavelength_min, scenario, constants: Constants) -> list:
+    """:func:`aperture_radiances` on plain arrays: target, background (``atm``: the band's)."""
+    surfaces = _surfaces(targets, wavelength_min, scenario)
+    return [_total_radiance_kernel(
+        atm["path_thermal"], reflectance, atm["wavelength"], temperature, atm["transmission"],
+        atm["solar_scatter"], atm["ground_reflected"], **_planck_knobs(constants))
+        for reflectance, temperature in surfaces]
+
+
+def _on_band(p, name: str, wavelength):
+    """A sensor curve of ``p`` resampled onto the band (:func:`resample_spectral`'s rule)."""
+    dim = f"{name}_wavelength"
+    if dim not in p:
+        return p[name]
+    return _interp_kernel(p[name], wavelength, source=p[dim])
+
+
+def sensor_band_arrays(p, wavelength, constants: Constants) -> dict:
+    """:data:`BAND_OUTPUTS` on plain arrays (``p``: the sensor's parameters)."""
+    optics = _optics_transmission_kernel(
+        p["cold_filter_transmission"], p["obscuration_ratio"],
+        _on_band(p, "optics_transmission", wavelength))
+    own = _sensor_irradiance_kernel(
+        p["focal_length"], p["aperture_diameter"], wavelength, p["cold_shield_temperature"],
+        p["cold_filter_transmission"], p["optics_emissivity"], p["optics_temperature"],
+        p["cold_filter_emissivity"], p["cold_filter_temperature"],
+        _on_band(p, "stray_irradiance", wavelength), **_planck_knobs(constants))
+    return {"optics_transmission": optics,
+            "quantum_efficiency": _on_band(p, "quantum_efficiency", wavelength),
+            "sensor_irradiance": own}
+
+
+def signal_arrays(p, atm, band: dict, radiances, constants: Constants) -> dict:
+    """:data:`SIGNAL_OUTPUTS` on plain arrays, from :func:`sensor_band_arrays`' band terms."""
+    hc = {"h": constants.planck, "c": constants.speed_of_light}
+    detector = (atm["wavelength"], band["quantum_efficiency"], p["detector_width_x"],
+                p["detector_width_y"], band["optics_transmission"])
+    lens = (p["focal_length"], p["aperture_diameter"])
+    (weights, target_rate, target_scene), (_, background_rate, background_scene) = (
+        _scene_kernel(*detector, radiance, *lens, band["sensor_irradiance"], **hc)
+        for radiance in radiances)
+    counts = _counts_kernel(target_rate, p["dark_current"], p["integration_time"],
+                            p["tdi_stages"], background_rate, p["max_well_fill"], p["max_well"])
+    return {**dict(zip(_COUNT_NAMES, counts, strict=True)), "spectral_weights": weights,
+            "path_rate": _path_rate_kernel(*detector, atm["path_thermal"],
+                                           atm["solar_scatter"], *lens, **hc),
+            "target_scene_rate": target_scene, "background_scene_rate": background_scene,
+            "sensor_rate": _rate_kernel(*detector[:4], band["sensor_irradiance"], **hc)}

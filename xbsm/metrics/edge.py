@@ -23,7 +23,7 @@ import numpy as np
 import xarray as xr
 
 from .._kernels import apply_kernel, dataset
-from .._metadata import named
+from .._metadata import Output, declared, named, outputs
 
 __all__ = [
     "EHO_POSITIONS",
@@ -257,3 +257,63 @@ def edge_terms(otf_slice, ifov, weights):
         "rer": named(rer, "1", "relative edge response", references="IBSM Eq. 3-61"),
         "eho": named(eho, "1", "edge height overshoot", references="IBSM Eq. 3-60"),
     })
+
+
+SLICE_OUTPUTS = outputs(
+    *(Output(f"{name}_{o}", "1", f"{long} along {o}", references=reference)
+      for name, long, reference in (("rer", "relative edge response", "IBSM Eq. 3-61"),
+                                    ("eho", "edge height overshoot", "IBSM Eq. 3-60"))
+      for o in ("x", "y")),
+    Output("rer", "1", "relative edge response (geometric mean)", references="IBSM Eq. 3-61"),
+    Output("eho", "1", "edge height overshoot (geometric mean)", references="IBSM Eq. 3-60"),
+)
+"""What :func:`slice_terms` and :func:`slice_terms_arrays` return (besides the RER of the
+unfiltered system along x and y, ``rer_unfiltered_x`` and ``rer_unfiltered_y``)."""
+
+
+def slice_terms(filtered, unfiltered, ifov, weights, edge_otf: str) -> xr.Dataset:
+    """RER and EHO of the x and y slices of a system OTF, and their geometric means.
+
+    Parameters
+    ----------
+    filtered : xr.DataArray
+        System OTF on ``frequency`` and ``orientation`` (x, y). [1]
+    unfiltered : xr.DataArray or None
+        The same without the post-processing filter (None: there is none). [1]
+    ifov : xr.DataArray
+        IFOV over ``orientation``. [rad]
+    weights : xr.DataArray
+        Quadrature weights on ``frequency`` (from :func:`xbsm.quadrature.edge_nodes`).
+    edge_otf : {"real", "abs"}
+        The OTF or its modulus.
+
+    Returns
+    -------
+    xr.Dataset
+        :data:`SLICE_OUTPUTS` and ``rer_unfiltered_x``, ``rer_unfiltered_y``.
+    """
+    def edge(system):
+        return edge_terms(abs(system) if edge_otf == "abs" else system, ifov, weights)
+
+    sliced = edge(filtered)
+    rer_unfiltered = sliced["rer"] if unfiltered is None else edge(unfiltered)["rer"]
+    by_orientation = {o: sliced.sel(orientation=o, drop=True) for o in ("x", "y")}
+    out = {f"{name}_{o}": by_orientation[o][name] for name in ("rer", "eho") for o in ("x", "y")}
+    out["rer"] = np.sqrt(out["rer_x"] * out["rer_y"])
+    out["eho"] = np.sqrt(out["eho_x"] * out["eho_y"])
+    out = {name: declared(out[name], o) for name, o in SLICE_OUTPUTS.items()}
+    return dataset({**out, **{f"rer_unfiltered_{o}": rer_unfiltered.sel(orientation=o, drop=True)
+                              for o in ("x", "y")}})
+
+
+def slice_terms_arrays(filtered, unfiltered, ifov, weights, abscissa, edge_otf: str) -> dict:
+    """:func:`slice_terms` on plain arrays: OTFs over (frequency, orientation), ifov (x, y)."""
+    def edge(system):
+        system = np.abs(system) if edge_otf == "abs" else system
+        return _edge_terms_kernel(system.T, weights, abscissa, ifov)
+
+    (rer_x, rer_y), (eho_x, eho_y) = edge(filtered)
+    unfiltered_x, unfiltered_y = (rer_x, rer_y) if unfiltered is None else edge(unfiltered)[0]
+    return {"rer_x": rer_x, "rer_y": rer_y, "eho_x": eho_x, "eho_y": eho_y,
+            "rer": np.sqrt(rer_x * rer_y), "eho": np.sqrt(eho_x * eho_y),
+            "rer_unfiltered_x": unfiltered_x, "rer_unfiltered_y": unfiltered_y}

@@ -21,7 +21,7 @@ import xarray as xr
 from xbsm import flags as _flags
 
 from .._kernels import apply_kernel, dataset
-from .._metadata import named
+from .._metadata import Output, declared, named, outputs
 
 __all__ = [
     "GIQE_VERSIONS",
@@ -735,22 +735,17 @@ def giqe_by_version(*, rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noi
     """
     rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain = map(
         _da, (rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain))
-    gsd = named(apply_kernel(_geometric_mean_kernel, gsd_x, gsd_y), "m",
-                "ground sample distance (geometric mean)")
-    gsd_gp = named(apply_kernel(_ground_plane_kernel, gsd, elevation, power=0.5), "m",
-                   "ground-plane geometric-mean GSD", references=GIQE_REFERENCES[4])
-    gsd_w = named(apply_kernel(_ground_plane_kernel, gsd_x, elevation, power=0.25), "m",
-                  "elevation-weighted GSD", references=_GSD_W_REFERENCE)
-    rer5 = named(giqe5_rer(rer_x, rer_y), "1", "GIQE 5 relative edge response",
-                 references=_RER5_REFERENCE)
-    versions = xr.DataArray(list(GIQE_VERSIONS), dims="giqe", name="giqe",
-                            attrs={"long_name": "GIQE version"})
+    gsd = declared(apply_kernel(_geometric_mean_kernel, gsd_x, gsd_y), OUTPUTS["gsd"])
+    gsd_gp = declared(apply_kernel(_ground_plane_kernel, gsd, elevation, power=0.5),
+                      OUTPUTS["gsd_gp"])
+    gsd_w = declared(apply_kernel(_ground_plane_kernel, gsd_x, elevation, power=0.25),
+                     OUTPUTS["gsd_w"])
+    rer5 = declared(giqe5_rer(rer_x, rer_y), OUTPUTS["rer_giqe5"])
     niirs = apply_kernel(_niirs_by_version_kernel, rer, gsd_x, gsd_y, eho, noise_gain, snr,
                          elevation, rer_x, rer_y, outputs=[("giqe",)],
                          sizes={"giqe": len(GIQE_VERSIONS)}, noise_coefficient=noise_coefficient)
-    references = "; ".join(f"GIQE {v}: {GIQE_REFERENCES[v]}" for v in GIQE_VERSIONS)
-    niirs = named(niirs.transpose("giqe", ...).assign_coords(giqe=versions), "1",
-                  "National Imagery Interpretability Rating Scale", references=references)
+    niirs = declared(niirs.transpose("giqe", ...).assign_coords(giqe=_versions()),
+                     OUTPUTS["niirs"])
     tested = (
         {"snr": snr, "rer": rer, "gsd": gsd, "elevation": elevation, "niirs": niirs},
         {"snr": snr, "rer": rer, "gsd": gsd_gp, "elevation": elevation, "niirs": niirs},
@@ -767,8 +762,59 @@ def giqe_by_version(*, rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noi
         "gsd": gsd,
         "gsd_gp": gsd_gp,
         "gsd_w": gsd_w,
-        "noise_gain": named(noise_gain, "1", "noise gain of the filter"),
+        "noise_gain": declared(noise_gain, OUTPUTS["noise_gain"]),
     })
+
+
+GIQE_VERSION_ATTRS = MappingProxyType({"long_name": "GIQE version"})
+"""The attributes of the ``giqe`` coordinate."""
+
+
+def _versions() -> xr.DataArray:
+    """The ``giqe`` coordinate."""
+    return xr.DataArray(list(GIQE_VERSIONS), dims="giqe", name="giqe",
+                        attrs=dict(GIQE_VERSION_ATTRS))
+
+
+OUTPUTS = outputs(
+    Output("niirs", "1", "National Imagery Interpretability Rating Scale", ("giqe",),
+           references="; ".join(f"GIQE {v}: {GIQE_REFERENCES[v]}" for v in GIQE_VERSIONS)),
+    Output("rer_giqe5", "1", "GIQE 5 relative edge response", references=_RER5_REFERENCE),
+    Output("gsd", "m", "ground sample distance (geometric mean)"),
+    Output("gsd_gp", "m", "ground-plane geometric-mean GSD", references=GIQE_REFERENCES[4]),
+    Output("gsd_w", "m", "elevation-weighted GSD", references=_GSD_W_REFERENCE),
+    Output("noise_gain", "1", "noise gain of the filter", carries=("sensor",)),
+)
+"""What :func:`giqe_by_version` and :func:`giqe_arrays` return besides ``flags``."""
+
+
+def sampling_q_arrays(wavelength, aperture_diameter, ifov):
+    """:func:`sampling_q` on plain arrays."""
+    return _sampling_q_kernel(wavelength, aperture_diameter, ifov)
+
+
+def giqe_arrays(*, rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain, q,
+                noise_coefficient, calibration) -> dict:
+    """:func:`giqe_by_version` on the plain arrays of one scenario (``q`` over orientation)."""
+    gsd = _geometric_mean_kernel(gsd_x, gsd_y)
+    gsd_gp = _ground_plane_kernel(gsd, elevation, power=0.5)
+    gsd_w = _ground_plane_kernel(gsd_x, elevation, power=0.25)
+    rer5 = _giqe5_rer_kernel(rer_x, rer_y)
+    niirs = _niirs_by_version_kernel(rer, gsd_x, gsd_y, eho, noise_gain, snr, elevation,
+                                     rer_x, rer_y, noise_coefficient=noise_coefficient)
+    gsd5_gp = (None if calibration[5].gsd_ground_plane is None
+               else _ground_plane_kernel(gsd_x, elevation, power=0.5))
+    q = xr.Variable("orientation", q)  # its test runs over orientation
+    tested = (
+        {"snr": snr, "rer": rer, "gsd": gsd, "elevation": elevation, "niirs": niirs},
+        {"snr": snr, "rer": rer, "gsd": gsd_gp, "elevation": elevation, "niirs": niirs},
+        {"snr": snr, "rer": rer5, "gsd": gsd_w, "gsd_ground_plane": gsd5_gp,
+         "elevation": elevation, "q": q, "niirs": niirs})
+    arrays, tests, _ = _tests_by_version(calibration, tested)
+    flags = _flags_kernel(*(np.asarray(getattr(a, "values", a)) for a in arrays),
+                          tests=tests, versions=len(GIQE_VERSIONS))
+    return {"niirs": niirs, "flags": flags, "rer_giqe5": rer5, "gsd": gsd, "gsd_gp": gsd_gp,
+            "gsd_w": gsd_w, "noise_gain": noise_gain}
 
 
 def _tests_by_version(calibration, tested):

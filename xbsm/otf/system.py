@@ -276,3 +276,65 @@ def _filter(sensor, fx, fy, method: Method):
                          ifov=float(pitch_x) / float(focal))
     return apply_kernel(_sampled_filter_kernel, fy, pitch_y, focal, fx, pitch_x, kernel=k,
                      dtype=complex)
+
+
+# ---- the stage on plain arrays (one eager scenario; xbsm._chain's direct applier) ----
+
+def _band_weights_arrays(spectral_weights, wavelength, count: int):
+    """:func:`otf_weights`, :func:`spectral_bins` and their normalisation on plain arrays."""
+    weights = np.where(spectral_weights > 0, spectral_weights, 0.0)
+    if not weights.sum() > 0:
+        weights = np.ones_like(weights)
+    n = wavelength.size
+    if 0 < count < n:
+        labels = np.minimum((np.arange(n) * count) // n, count - 1)
+        wavelength = np.bincount(labels, wavelength) / np.bincount(labels)
+        weights = np.bincount(labels, weights)
+    return wavelength, weights / weights.sum()
+
+
+def _filter_arrays(p, fx, fy, method: Method):
+    """:func:`_filter` on plain arrays."""
+    kernel = p["filter_kernel"]
+    rule = _filter_rule(kernel, method.filter_otf)
+    if rule is None:
+        return np.ones(fx.shape)
+    if rule == "pybsm":
+        return filters._pybsm_filter_kernel(fx, fy, kernel=kernel,
+                                            ifov=p["pixel_pitch_x"] / p["focal_length"])
+    return _sampled_filter_kernel(fy, p["pixel_pitch_y"], p["focal_length"], fx,
+                                  p["pixel_pitch_x"], kernel=kernel)
+
+
+def system_slice_arrays(p, nodes, wavelength, spectral_weights, integration_time, slant_range,
+                        method: Method):
+    """Unfiltered and filtered system OTF on the x and y slices, and the band r0 (arrays).
+
+    As :func:`system_components` for one eager scenario (``p``: its sensor and scenario
+    parameters), with the ``nodes`` (frequency) along the first axis and orientation
+    (x, y) along the second.
+    """
+    fx, fy = nodes[:, None] * [1.0, 0.0], nodes[:, None] * [0.0, 1.0]
+    wl, w = _band_weights_arrays(spectral_weights, wavelength, method.otf_wavelengths)
+    cn2 = p["cn2_at_1m"]
+    r0_ref = _turbulent_path_kernel(
+        p["high_altitude_wind_speed"], slant_range, p["altitude"], cn2,
+        nodes=turbulence._path_nodes(method.turbulence_path_samples,
+                                     method.turbulence_path_rule),
+        form=method.geometry)
+    radial = [
+        _aperture_band_kernel(nodes, p["aperture_diameter"], p["obscuration_ratio"], wl, w),
+        _turbulence_band_kernel(cn2, nodes, r0_ref, integration_time, p["tdi_stages"],
+                                p["platform_speed"], p["aperture_diameter"], wl, w)]
+    sliced = [
+        _detector_kernel(p["detector_width_x"], p["focal_length"], fx, p["detector_width_y"],
+                         fy),
+        _jitter_kernel(p["jitter_x"], fx, p["jitter_y"], fy),
+        _exposure_drift_kernel(p["drift_rate_x"], integration_time, p["tdi_stages"], fx,
+                               p["drift_rate_y"], fy),
+        _wavefront_band_kernel(p["wavefront_variance"], p["wavefront_wavelength"], fx,
+                               p["wavefront_correlation_length_x"], fy,
+                               p["wavefront_correlation_length_y"], wl, w)]
+    unfiltered = _product_kernel(*(r[:, None] for r in radial), *sliced)
+    r0 = _band_r0_kernel(cn2, r0_ref, wl, w)
+    return unfiltered, unfiltered * _filter_arrays(p, fx, fy, method), r0

@@ -10,10 +10,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .. import flags as fl
-from .. import params, radiometry
-from .._metadata import result
-from ..atmosphere import band_atmosphere
+from .. import _chain, params
 from ..methods import method as resolve_method
 from ..params import check_inputs
 
@@ -57,7 +54,7 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
     """
     check_inputs(sensor, scenario)
     m = resolve_method(method)
-    s, k = sensor, m.constants
+    s = sensor
     if reflectance is None:
         reflectance = np.linspace(0.0, 1.0, 100)
     reflectance = params.labelled("reflectance", reflectance, "reflectance")
@@ -68,26 +65,5 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
     temperature = params.argument("temperature", temperature)
     integration_time = (s["integration_time"] if integration_time is None
                         else params.argument("integration_time", integration_time))
-    atm = band_atmosphere(scenario["altitude"], scenario["ground_range"], scenario["visibility"],
-                          s["wavelength_min"], s["wavelength_max"],
-                          interpolation=m.atmosphere_interpolation, band_edges=m.band_edges)
-    band = radiometry.sensor_band_terms(s, atm["wavelength"], k)
-    radiance = radiometry.total_radiance(atm, reflectance, temperature, k)
-    spectral = radiometry.photon_detection_rate(
-        radiometry.detector_irradiance(radiance, band, s), band["quantum_efficiency"],
-        s["detector_width_x"], s["detector_width_y"], k)
-    rate = radiometry.band_integral(spectral) + s["dark_current"]
-    counts = rate * integration_time * s["tdi_stages"]
-    saturation = counts.max("reflectance") / s["max_well"]
-    scale = xr.where(saturation > 1.0, 1.0 / saturation, 1.0)
-    counts = np.minimum(counts * scale, s["max_well"])
-    brightest = spectral.isel(reflectance=-1, drop=True)
-    flags = fl.set_flag(atm["flags"], "well_fill_limited", scale < 1.0)
-    return result({
-        "photoelectrons": counts.assign_attrs(units="count", long_name="photoelectrons per pixel"),
-        "effective_integration_time": (integration_time * scale).assign_attrs(
-            units="s", long_name="integration time after the well limit"),
-        "spectral_weights": (brightest / brightest.max("wavelength")).assign_attrs(
-            units="1", long_name="normalised spectral photoelectron rate"),
-        "flags": flags,
-    }, m)
+    return _chain.reflectance_to_photoelectrons(sensor, scenario, m, reflectance, temperature,
+                                                integration_time)

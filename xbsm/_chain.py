@@ -1,0 +1,416 @@
+"""The model chain, written once: the stages in data-flow order against an applier (private).
+
+atmosphere -> radiometry (aperture radiances, the sensor's band terms, signal) ->
+optics cutoff -> noise -> SNR; then geometry -> edge quadrature -> system OTF on
+the x and y slices -> edge terms -> GIQE.
+
+:func:`snr` and :func:`niirs` compose the stages once (:func:`_snr_chain`,
+:func:`_niirs_chain`); an applier decides how a stage runs:
+
+- :class:`Direct`, for one eager scenario (no sweep dim, no dask, atmosphere inputs
+  in the database's units): each stage's array orchestrator on plain numpy arrays,
+  and the result labelled once from the stages' declared outputs. A notebook user,
+  an optimizer or a Monte Carlo loop pays for the arithmetic, not for a few hundred
+  small DataArrays.
+- :class:`Labelled`, for everything else (sweeps, dask): each stage's labelled door,
+  one ``xr.apply_ufunc`` per kernel, so that each quantity keeps only the dims it
+  depends on (a sensor quantity keeps sensor dims) and dask stays lazy.
+
+Both appliers run the same stage kernels in the same order; ``tests/test_chain.py``
+checks that they agree on every pyBSM reference case.
+"""
+
+from __future__ import annotations
+
+from contextlib import nullcontext
+
+import numpy as np
+import xarray as xr
+
+from . import flags as fl
+from . import geometry, noise, params, quadrature, radiometry
+from ._metadata import Output, dataset_of, declared, outputs, result
+from .atmosphere import WAVELENGTH_ATTRS, band_atmosphere, band_atmosphere_arrays
+from .metrics import edge as edge_
+from .metrics import giqe as giqe_
+from .otf import system
+
+_OWN_DIMS = frozenset({"kernel_y", "kernel_x"}
+                      | {f"{name}_wavelength" for name in params.SPECTRAL})
+"""The parameters' own dims (a sensor curve's wavelengths, the filter kernel's rows and
+columns): every other dim is a sweep."""
+_ATMOSPHERE_UNITS = (("altitude", "m"), ("ground_range", "m"), ("visibility", "km"))
+
+OUTPUTS = outputs(
+    Output("well_fill", "1", "well fill fraction"),
+    Output("cutoff_frequency", "cycles/rad", "optics cutoff frequency D/lambda_min",
+           carries=("sensor",)),
+    Output("coherence_diameter", "m", "band-weighted coherence diameter r0"),
+)
+"""The chain's own outputs (the stages declare theirs)."""
+
+_DECLARED = {**radiometry.SIGNAL_OUTPUTS, **noise.OUTPUTS, **geometry.VIEW_OUTPUTS,
+             **edge_.SLICE_OUTPUTS, **giqe_.OUTPUTS, **OUTPUTS}
+
+
+# ---- the composition ---------------------------------------------------------------
+
+def _snr_chain(ap, m, targets: str):
+    """The SNR chain: its result's variables, the band atmosphere and the optics cutoff."""
+    atm = ap.atmosphere(m)
+    radiances = ap.radiances(atm, targets, m)
+    band = ap.sensor_band(atm, m)
+    signal = ap.signal(atm, band, radiances, m)
+    cutoff = ap.cutoff(atm, band)
+    noise_ = ap.noise(signal)
+    brighter = np.maximum(signal["target_photoelectrons"], signal["background_photoelectrons"])
+    flags = ap.flag(atm["flags"], "well_fill_limited", signal["well_fill_scale"] < 1.0)
+    if params._partial_spectral_coverage(ap.sensor_dataset):  # one bit for the whole sensor
+        flags = ap.flag(flags, "partial_spectral_coverage", True)
+    counts = ("effective_integration_time", "target_photoelectrons",
+              "background_photoelectrons", "contrast_photoelectrons")
+    values = {
+        "snr": noise_["snr"],
+        "snr_frame": noise_["snr_frame"],
+        **{name: signal[name] for name in counts},
+        "well_fill": brighter / ap.sensor["max_well"],
+        **{name: noise_[name] for name in noise.OUTPUTS if name not in ("snr", "snr_frame")},
+        "spectral_weights": signal["spectral_weights"],
+        "flags": flags,
+    }
+    return values, atm, cutoff
+
+
+def _niirs_chain(ap, m, calibration) -> dict:
+    """The NIIRS chain: the SNR chain, the viewing geometry, the edge terms, the GIQE."""
+    r, atm, cutoff = _snr_chain(ap, m, "giqe")
+    view = ap.view(m)
+    edges = _edge_chain(ap, r, atm, cutoff, view, m)
+    s = ap.sensor
+    metrics = ap.giqe(
+        rer=edges["rer"], eho=edges["eho"], rer_x=edges["rer_unfiltered_x"],
+        rer_y=edges["rer_unfiltered_y"], gsd_x=view["gsd_x"], gsd_y=view["gsd_y"],
+        snr=r["snr"], elevation=view["elevation_angle"], noise_gain=ap.noise_gain(),
+        # GIQE 5's Q = lambda N / p at the band centre, per orientation (flags only)
+        q=ap.sampling_q(0.5 * (s["wavelength_min"] + s["wavelength_max"]),
+                        s["aperture_diameter"], edges["ifov"]),
+        noise_coefficient=m.giqe4_noise_coefficient, calibration=calibration)
+    flags = metrics["flags"] | r["flags"] | edges["flags"]
+    hidden = ("flags", "ifov", "rer_unfiltered_x", "rer_unfiltered_y")
+    return {
+        "niirs": metrics["niirs"],
+        **{name: r[name] for name in r if name not in ("spectral_weights", "flags")},
+        **{name: value for name, value in edges.items() if name not in hidden},
+        **{name: metrics[name] for name in giqe_.OUTPUTS if name != "niirs"},
+        **{name: view[name] for name in ("slant_range", "elevation_angle")},
+        "flags": flags,
+    }
+
+
+def _edge_chain(ap, r, atm, cutoff, view, m) -> dict:
+    """RER and EHO of the system OTF on the x and y slices, at the method's quadrature nodes."""
+    ifov_x, ifov_y = view["ifov_x"], view["ifov_y"]
+    nodes, weights = ap.edge_nodes(cutoff, ifov_x, ifov_y, m)
+    otf = ap.system_slices(nodes, atm, r["spectral_weights"], r["effective_integration_time"],
+                           view["slant_range"], m)
+    ifov = ap.orientations(ifov_x, ifov_y)
+    unfiltered = None if ap.sensor["filter_kernel"].shape == (1, 1) else otf["system_unfiltered"]
+    terms = ap.slice_terms(otf["system"], unfiltered, ifov, weights, m.edge_otf)
+    coarse = False
+    if m.edge_rule == "uniform_trapezoid":
+        coarse = ap.undersampled(nodes, cutoff, ifov_x, ifov_y, m.undersampling_threshold)
+    flags = ap.flag(ap.no_flags(), "undersampled_grid", coarse)
+    flags = ap.flag(flags, "blur_unresolved", terms["rer"] < quadrature.UNRESOLVED_RER)
+    return {**terms, "coherence_diameter": otf["coherence_diameter"],
+            "cutoff_frequency": cutoff, "ifov": ifov, "flags": flags}
+
+
+def _photoelectrons_chain(ap, m, reflectance, temperature, integration_time) -> dict:
+    """Image simulation's radiometry: photoelectrons of Lambertian targets by reflectance."""
+    s, k = ap.sensor, m.constants
+    atm = ap.atmosphere(m)
+    band = ap.sensor_band(atm, m)
+    radiance = radiometry.total_radiance(atm, reflectance, temperature, k)
+    spectral = radiometry.photon_detection_rate(
+        radiometry.detector_irradiance(radiance, band, s), band["quantum_efficiency"],
+        s["detector_width_x"], s["detector_width_y"], k)
+    rate = radiometry.band_integral(spectral) + s["dark_current"]
+    counts = rate * integration_time * s["tdi_stages"]
+    saturation = counts.max("reflectance") / s["max_well"]
+    scale = xr.where(saturation > 1.0, 1.0 / saturation, 1.0)
+    counts = np.minimum(counts * scale, s["max_well"])
+    brightest = spectral.isel(reflectance=-1, drop=True)
+    return {
+        "photoelectrons": counts.assign_attrs(units="count", long_name="photoelectrons per pixel"),
+        "effective_integration_time": (integration_time * scale).assign_attrs(
+            units="s", long_name="integration time after the well limit"),
+        "spectral_weights": (brightest / brightest.max("wavelength")).assign_attrs(
+            units="1", long_name="normalised spectral photoelectron rate"),
+        "flags": ap.flag(atm["flags"], "well_fill_limited", scale < 1.0),
+    }
+
+
+# ---- the doors ---------------------------------------------------------------------
+
+def snr(sensor: xr.Dataset, scenario: xr.Dataset, m, targets: str) -> xr.Dataset:
+    """:func:`xbsm.snr` on checked inputs and a resolved method."""
+    ap = applier(sensor, scenario)
+    with ap.errors():
+        values, atm, _ = _snr_chain(ap, m, targets)
+        return ap.result(values, atm, m, targets=targets)
+
+
+def niirs(sensor: xr.Dataset, scenario: xr.Dataset, m, calibration) -> xr.Dataset:
+    """:func:`xbsm.niirs` on checked inputs, a resolved method and calibration."""
+    ap = applier(sensor, scenario)
+    with ap.errors():
+        values = _niirs_chain(ap, m, calibration)
+        return ap.result(values, None, m, flags="NIIRS validity flags")
+
+
+def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, m, frequency, fy) -> xr.Dataset:
+    """:func:`xbsm.system_otf` on checked inputs, a resolved method and checked frequencies.
+
+    ``frequency`` None: 201 points from 0 to the optics cutoff D / lambda_min.
+    """
+    ap = Labelled(sensor, scenario)
+    r, atm, cutoff = _snr_chain(ap, m, "giqe")
+    if frequency is None:
+        frequency = np.linspace(0.0, float(cutoff.max()), 201)
+    frequency = params.frequencies("frequency", params.labelled("frequency", frequency,
+                                                                "frequency"))
+    if "frequency" in frequency.coords:
+        frequency["frequency"].attrs.update(units="cycles/rad", long_name="spatial frequency")
+    if fy is not None:
+        fy = params.frequencies("fy", fy)
+    slant = geometry.slant_range(scenario["ground_range"], scenario["altitude"], form=m.geometry)
+    out = system.system_components(
+        sensor, scenario, frequency, spectral_weights=system.otf_weights(r["spectral_weights"]),
+        integration_time=r["effective_integration_time"], slant_range=slant, method=m, fy=fy)
+    return result({**out.data_vars, "flags": r["flags"]}, m)
+
+
+def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, m, reflectance,
+                                  temperature, integration_time) -> xr.Dataset:
+    """:func:`xbsm.simulate.reflectance_to_photoelectrons` on checked arguments."""
+    values = _photoelectrons_chain(Labelled(sensor, scenario), m, reflectance, temperature,
+                                   integration_time)
+    return result(values, m)
+
+
+def single_scenario(sensor: xr.Dataset, scenario: xr.Dataset) -> dict | None:
+    """Every parameter of a single eager scenario as a numpy array; None for anything else.
+
+    The datasets must already have passed :func:`xbsm.params.check_inputs`.
+    """
+    values = {}
+    for ds in (sensor, scenario):
+        for name, variable in ds.variables.items():
+            data = variable.data
+            if not isinstance(data, np.ndarray) or not _OWN_DIMS.issuperset(variable.dims):
+                return None
+            values[name] = data
+    if sensor.variables["filter_kernel"].dims != ("kernel_y", "kernel_x"):
+        return None  # an edited kernel in the other order: the labelled door transposes it
+    for name, units in _ATMOSPHERE_UNITS:
+        if scenario.variables[name].attrs.get("units", units) != units:
+            return None
+    return values
+
+
+def applier(sensor: xr.Dataset, scenario: xr.Dataset):
+    """:class:`Direct` for a single eager scenario, else :class:`Labelled`."""
+    p = single_scenario(sensor, scenario)
+    return Labelled(sensor, scenario) if p is None else Direct(sensor, scenario, p)
+
+
+# ---- the appliers ------------------------------------------------------------------
+
+class Labelled:
+    """Each stage through its labelled door: sweeps keep their dims, dask stays lazy."""
+
+    def __init__(self, sensor: xr.Dataset, scenario: xr.Dataset):
+        self.sensor = self.sensor_dataset = sensor
+        self.scenario = scenario
+
+    @staticmethod
+    def errors():
+        """Floating-point errors as the kernels' boundary handles them."""
+        return nullcontext()
+
+    def atmosphere(self, m) -> xr.Dataset:
+        s, sc = self.sensor, self.scenario
+        return band_atmosphere(sc["altitude"], sc["ground_range"], sc["visibility"],
+                               s["wavelength_min"], s["wavelength_max"],
+                               interpolation=m.atmosphere_interpolation, band_edges=m.band_edges)
+
+    def radiances(self, atm, targets, m):
+        return radiometry.aperture_radiances(atm, self.scenario, targets,
+                                             self.sensor["wavelength_min"], m.constants)
+
+    def sensor_band(self, atm, m):
+        return radiometry.sensor_band_terms(self.sensor, atm["wavelength"], m.constants)
+
+    def signal(self, atm, band, radiances, m):
+        return radiometry.signal_terms(self.sensor, atm, *radiances, m.constants, band=band)
+
+    def cutoff(self, atm, band):
+        s = self.sensor
+        return quadrature.band_cutoff(s["aperture_diameter"], atm["wavelength"],
+                                      band["quantum_efficiency"], band["optics_transmission"],
+                                      s["wavelength_min"])
+
+    def noise(self, signal):
+        return noise.noise_terms(signal, self.sensor)
+
+    @staticmethod
+    def flag(flags, name: str, condition):
+        return fl.set_flag(flags, name, condition)
+
+    @staticmethod
+    def no_flags():
+        return xr.DataArray(np.int32(0))
+
+    def view(self, m):
+        s, sc = self.sensor, self.scenario
+        return geometry.viewing_geometry(
+            sc["ground_range"], sc["altitude"], s["pixel_pitch_x"], s["pixel_pitch_y"],
+            s["focal_length"], elevation=m.elevation, form=m.geometry)
+
+    @staticmethod
+    def edge_nodes(cutoff, ifov_x, ifov_y, m):
+        return quadrature.edge_nodes(cutoff, ifov_x, ifov_y, **m.edge_quadrature_knobs())
+
+    def system_slices(self, nodes, atm, spectral_weights, integration_time, slant_range, m):
+        # the weights carry their wavelengths; ``atm`` is for the direct applier's arrays
+        return system.system_components(
+            self.sensor, self.scenario, nodes, spectral_weights=system.otf_weights(
+                spectral_weights), integration_time=integration_time,
+            slant_range=slant_range, method=m)
+
+    @staticmethod
+    def orientations(x, y):
+        return xr.concat([x, y], dim="orientation").assign_coords(orientation=["x", "y"])
+
+    slice_terms = staticmethod(edge_.slice_terms)
+    undersampled = staticmethod(quadrature.undersampled)
+    giqe = staticmethod(giqe_.giqe_by_version)
+    sampling_q = staticmethod(giqe_.sampling_q)
+
+    def noise_gain(self):
+        return noise.noise_gain(self.sensor["filter_kernel"])
+
+    @staticmethod
+    def result(values: dict, atm, m, *, flags=None, **attrs) -> xr.Dataset:
+        """The result Dataset; ``flags``: the long name of NIIRS-style int32 flags."""
+        out = {name: value if name == "flags" else declared(value, _DECLARED[name])
+               for name, value in values.items()}
+        if flags is not None:
+            out["flags"] = out["flags"].astype(np.int32).assign_attrs(fl.flag_attrs(flags))
+        return result(out, m, **attrs)
+
+
+class Direct:
+    """Each stage's array orchestrator on plain arrays; the result labelled once."""
+
+    def __init__(self, sensor: xr.Dataset, scenario: xr.Dataset, p: dict):
+        self.sensor = self.scenario = p
+        self.sensor_dataset = sensor
+        self._labelled = Labelled(sensor, scenario)
+
+    @staticmethod
+    def errors():
+        """IEEE results without warnings, as the labelled doors give them."""
+        return np.errstate(all="ignore")
+
+    def atmosphere(self, m) -> dict:
+        p = self.sensor
+        atm = band_atmosphere_arrays(p["altitude"], p["ground_range"], p["visibility"],
+                                     p["wavelength_min"], p["wavelength_max"],
+                                     interpolation=m.atmosphere_interpolation,
+                                     band_edges=m.band_edges)
+        return self._labelled.atmosphere(m) if atm is None else atm  # the door raises
+
+    def radiances(self, atm, targets, m):
+        return radiometry.radiance_arrays(atm, targets, self.sensor["wavelength_min"],
+                                          self.scenario, m.constants)
+
+    def sensor_band(self, atm, m):
+        return radiometry.sensor_band_arrays(self.sensor, atm["wavelength"], m.constants)
+
+    def signal(self, atm, band, radiances, m):
+        return radiometry.signal_arrays(self.sensor, atm, band, radiances, m.constants)
+
+    def cutoff(self, atm, band):
+        p = self.sensor
+        return quadrature.band_cutoff_arrays(p["aperture_diameter"], atm["wavelength"],
+                                             band["quantum_efficiency"],
+                                             band["optics_transmission"], p["wavelength_min"])
+
+    def noise(self, signal):
+        return noise.noise_arrays(self.sensor, signal)
+
+    @staticmethod
+    def flag(flags, name: str, condition):
+        return flags | np.where(condition, fl.flag(name), 0)
+
+    @staticmethod
+    def no_flags():
+        return np.int32(0)
+
+    def view(self, m):
+        p = self.sensor
+        return geometry.viewing_arrays(p["altitude"], p["ground_range"], p["pixel_pitch_x"],
+                                       p["pixel_pitch_y"], p["focal_length"],
+                                       elevation=m.elevation, form=m.geometry)
+
+    @staticmethod
+    def edge_nodes(cutoff, ifov_x, ifov_y, m):
+        nodes, weights, sine = quadrature.edge_rule_arrays(cutoff, ifov_x, ifov_y,
+                                                           **m.edge_quadrature_knobs())
+        return nodes, (weights, sine)
+
+    def system_slices(self, nodes, atm, spectral_weights, integration_time, slant_range, m):
+        unfiltered, filtered, r0 = system.system_slice_arrays(
+            self.sensor, nodes, atm["wavelength"], spectral_weights, integration_time,
+            slant_range, m)
+        return {"system": filtered, "system_unfiltered": unfiltered, "coherence_diameter": r0}
+
+    @staticmethod
+    def orientations(x, y):
+        return np.array([x, y])
+
+    @staticmethod
+    def slice_terms(filtered, unfiltered, ifov, weights, edge_otf):
+        return edge_.slice_terms_arrays(filtered, unfiltered, ifov, *weights, edge_otf)
+
+    @staticmethod
+    def undersampled(nodes, cutoff, ifov_x, ifov_y, threshold):
+        return quadrature.undersampled_arrays(nodes.size, cutoff, ifov_x, ifov_y, threshold)
+
+    giqe = staticmethod(giqe_.giqe_arrays)
+    sampling_q = staticmethod(giqe_.sampling_q_arrays)
+
+    def noise_gain(self):
+        return noise.noise_gain_arrays(self.sensor["filter_kernel"])
+
+    @staticmethod
+    def result(values: dict, atm, m, *, flags="validity flags", **attrs) -> xr.Dataset:
+        """The result Dataset, labelled from the stages' declarations."""
+        variables = {}
+        for name, value in values.items():
+            if name == "flags":
+                dims = ("giqe",) if np.ndim(value) else ()
+                variables[name] = xr.Variable(dims, np.asarray(value, dtype=np.int32),
+                                              fl.flag_attrs(flags))
+            else:
+                o = _DECLARED[name]
+                variables[name] = xr.Variable(o.dims, np.asarray(value, dtype=float), o.attrs())
+        coords = {}
+        if "spectral_weights" in variables:
+            coords["wavelength"] = xr.Variable("wavelength", atm["wavelength"],
+                                               dict(WAVELENGTH_ATTRS))
+        if "niirs" in variables:
+            coords["giqe"] = xr.Variable("giqe", list(giqe_.GIQE_VERSIONS),
+                                         dict(giqe_.GIQE_VERSION_ATTRS))
+        return dataset_of(variables, coords, {"method": m.describe(), **attrs})
