@@ -14,6 +14,10 @@ uninterrupted run of its own study. Scenarios (``--scenarios``, all but
     ``--race-delay`` seconds apart. The second must be refused at once, with one
     stderr line naming the first's process; A's file must equal A's reference;
     then B, run again with ``--overwrite``, must equal B's reference.
+``study``
+    Study A interrupted once some chunks are saved, then study B run on the same
+    output: A's chunks must be set aside (one line naming the study) and the
+    file must equal B's reference (the review's mix, one run after the other).
 ``database``
     The atmosphere database replaced between an interrupt and the resume: run,
     SIGINT once some chunks are saved, resume from a copy of the package whose
@@ -39,7 +43,8 @@ uninterrupted run of its own study. Scenarios (``--scenarios``, all but
 ``damage``
     After an interrupt, one ``block-*.npz`` is truncated, bit-flipped, or
     rewritten as a valid file with one number changed and its old digest
-    ("tampered"); the resume must say it recomputes that file and equal the
+    ("tampered"), or replaced by another chunk's verified file of the same shapes
+    ("swapped"); the resume must say it recomputes that file and equal the
     reference. Also a run killed with SIGKILL (stale lock, no handler): the
     next run takes the lock over and resumes.
 ``refusals``
@@ -92,7 +97,8 @@ STUDY = ROOT / "recipes" / "studies" / "interrupt.toml"
 HANG_SECONDS = 30.0  # a child still alive this long after its signal is a hang (killed)
 EXIT_LIMIT = 3.0  # issue 20: a signal is honoured within 3 s
 LONG = 900.0  # an uninterrupted run that takes longer than this is a hang too
-SCENARIOS = ("race", "database", "version", "signals", "damage", "refusals", "compute")
+SCENARIOS = ("race", "study", "database", "version", "signals", "damage", "refusals",
+             "compute")
 DEFAULT_SCENARIOS = SCENARIOS[:-1]
 
 #: Study A of the race (the review's): ground range x visibility x 20 aperture diameters.
@@ -463,10 +469,12 @@ def scenario_race(world: World, args) -> list[dict]:
 
 
 def _resume_from(world: World, name: str, interrupt_package: Path, resume_package: Path,
-                 reference: xr.Dataset, percent: int, aside_says: str) -> dict:
+                 reference: xr.Dataset, percent: int, aside_says: str,
+                 resume_study: Path | None = None) -> dict:
     """Interrupt with one package, resume with another: parts set aside, output = reference."""
     child, row = interrupt_at(world, world.study_a, interrupt_package, percent)
-    resume = Child(run_args(world, world.study_a), world.work, resume_package).finish(LONG)
+    resume = Child(run_args(world, resume_study or world.study_a), world.work,
+                   resume_package).finish(LONG)
     aside_lines = [line for line in resume.err if "set aside" in line]
     aside = world.set_aside()
     row.update(variant=name, resume={**resume.record(), "found_done": resume.found_done()},
@@ -526,7 +534,22 @@ def scenario_version(world: World, args) -> list[dict]:
     return rows
 
 
-def _damage(file: Path, how: str) -> None:
+def scenario_study(world: World, args) -> list[dict]:
+    """Study A interrupted, then study B (another altitude) run on the same output."""
+    reference = world.reference("B", world.study_b, ROOT, ["--no-figures"])
+    return [{"try": i, **_resume_from(world, "study B after A", ROOT, ROOT, reference,
+                                      args.interrupt_percent, "study", world.study_b)}
+            for i in range(args.damage_tries)]
+
+
+def _same_shapes(a: Path, b: Path) -> bool:
+    with np.load(a) as x, np.load(b) as y:
+        return sorted(x.files) == sorted(y.files) and all(
+            x[n].shape == y[n].shape for n in x.files) and any(
+            not np.array_equal(x[n], y[n], equal_nan=True) for n in x.files if n != "__digest__")
+
+
+def _damage(file: Path, how: str, blocks: list[Path]) -> None:
     data = bytearray(file.read_bytes())
     if how == "truncated":
         file.write_bytes(bytes(data[:len(data) // 2]))
@@ -541,19 +564,22 @@ def _damage(file: Path, how: str) -> None:
         flat[np.flatnonzero(np.isfinite(flat))[0]] += 1.0
         with open(file, "wb") as handle:
             np.savez(handle, **arrays)
+    elif how == "swapped":  # another chunk's whole, verified file under this chunk's name
+        donor = next(b for b in blocks if b != file and _same_shapes(b, file))
+        shutil.copyfile(donor, file)
 
 
 def scenario_damage(world: World, args) -> list[dict]:
     reference = world.reference("A", world.study_a, ROOT, ["--no-figures"])
     rows = []
     for i in range(args.damage_tries):
-        for how in ("truncated", "bit-flipped", "tampered", "killed"):
+        for how in ("truncated", "bit-flipped", "tampered", "swapped", "killed"):
             signum = signal.SIGKILL if how == "killed" else signal.SIGINT
             child, row = interrupt_at(world, world.study_a, ROOT, args.interrupt_percent, signum)
             blocks = world.blocks()
             victim = blocks[len(blocks) // 2] if blocks and how != "killed" else None
             if victim is not None:
-                _damage(victim, how)
+                _damage(victim, how, blocks)
             resume = Child(run_args(world, world.study_a), world.work, ROOT).finish(LONG)
             said = [line for line in resume.err if "did not verify" in line]
             row.update(**{"try": i}, damage=how, victim=victim.name if victim else None,
@@ -629,34 +655,61 @@ def scenario_refusals(world: World, args) -> list[dict]:
     return rows
 
 
-def _moments(count: int, write: float, figures: float) -> list[tuple[str, float]]:
-    """``count`` moments: half spread over writing the file, half over the figures."""
+def _all_computed(match) -> bool:
+    return match.group(1) == "100"
+
+
+def _segments(calibration: Child) -> list[tuple[str, str, float]]:
+    """The stretches of a run after its last chunk: (what, line that starts it, seconds).
+
+    The first is writing the NetCDF file (from "chunks computed: N of N (100 %)" to
+    "wrote OUT.nc"); then one per figure (from the line of the file before it) and
+    the last from the last figure's line to the end of the process.
+    """
+    computed = calibration.wait_line(_PERCENT, 0, _all_computed)
+    marks = [("writing the NetCDF file", _PERCENT.pattern, computed)]
+    marks += [(f"after {Path(text.split(' ', 1)[1]).name}", f"^{re.escape(text)}$", t)
+              for t, name, text in calibration.lines
+              if name == "out" and text.startswith("wrote ") and t >= computed]
+    ends = [t for *_, t in marks[1:]] + [calibration.seconds]
+    return [(what, line, end - t) for (what, line, t), end in zip(marks, ends, strict=True)]
+
+
+def _moments(count: int, segments) -> list[tuple[str, str, float]]:
+    """``count`` moments: half spread over writing the file, half over the figures' stretches.
+
+    Each is (what, the line it is timed from, seconds after that line), so a run
+    slower or faster than the calibration is still hit in the same stretch.
+    """
     first = (count + 1) // 2
-    return ([("write", (i + 0.5) / first * write) for i in range(first)]
-            + [("figures", (i + 0.5) / (count - first) * figures) for i in range(count - first)])
+    (what, line, write), figures = segments[0], segments[1:]
+    moments = [(what, line, (i + 0.5) / first * write) for i in range(first)]
+    total = sum(length for *_, length in figures)
+    for i in range(count - first):
+        at = (i + 0.5) / (count - first) * total
+        for what, line, length in figures:
+            if at < length:
+                moments.append((what, line, at))
+                break
+            at -= length
+    return moments
 
 
 def scenario_signals(world: World, args) -> list[dict]:
     world.reference("default study", None, ROOT)
     reference, calibration = world.references["default study"]
-    computed = calibration.wait_line(_PERCENT, 0, lambda m: m.group(1) == "100")
+    segments = _segments(calibration)
     wrote_line = rf"^wrote {re.escape(str(world.out))}$"
-    wrote = calibration.wait_line(wrote_line, 0)
-    write, figures = wrote - computed, calibration.seconds - wrote
-    print(f"default study: all chunks computed at {computed:.2f} s, file written at {wrote:.2f} s, "
-          f"end at {calibration.seconds:.2f} s: writing {write:.2f} s, figures {figures:.2f} s",
-          flush=True)
-    moments = [(signal.SIGINT, *m) for m in _moments(args.signal_tries, write, figures)]
-    moments += [(signal.SIGTERM, *m) for m in _moments(args.sigterm_tries, write, figures)]
+    print("default study after its last chunk: " + ", ".join(
+        f"{what} {length:.2f} s" for what, _, length in segments), flush=True)
+    moments = [(signal.SIGINT, *m) for m in _moments(args.signal_tries, segments)]
+    moments += [(signal.SIGTERM, *m) for m in _moments(args.sigterm_tries, segments)]
     rows = []
-    for signum, after, offset in moments:
+    for signum, after, line, offset in moments:
         world.clean()
         child = Child(["run", "-o", world.out], world.work, ROOT)
-        if after == "write":  # from the child's own line "chunks computed: N of N (100 %"
-            start = child.wait_line(_PERCENT, LONG, lambda m: m.group(1) == "100")
-        else:  # from its line "wrote OUT.nc"
-            start = child.wait_line(wrote_line, LONG)
-        if start is not None:
+        start = child.wait_line(line, LONG, _all_computed if line == _PERCENT.pattern else None)
+        if start is not None:  # timed from the child's own line
             time.sleep(max(0.0, child.started + start + offset - time.perf_counter()))
         sent = child.send(signum)
         child.finish()
@@ -670,7 +723,8 @@ def scenario_signals(world: World, args) -> list[dict]:
                "output_exists": world.out.exists(), "chunks_left": len(world.blocks()),
                "stderr": child.err[-2:]}
         problems = []
-        expected = (0,) if not sent else (128 + signum, 0)
+        # killed by the signal itself (returncode -signum) is what a shell also shows as 128 + n
+        expected = (0,) if not sent else (128 + signum, -signum, 0)
         if child.hang:
             problems.append("hang")
         elif child.code not in expected:
@@ -696,7 +750,7 @@ def scenario_signals(world: World, args) -> list[dict]:
                                 f"{row['chunks_left']} left")
         row["problems"] = problems
         rows.append(row)
-        print(f"{row['signal']} {offset:.2f} s after {after} starts ({phase}): exit {child.code} "
+        print(f"{row['signal']} {offset:.2f} s into {after} ({phase}): exit {child.code} "
               f"after {row['exit_latency_s']} s; file {row['file']['cells_differing']} cells "
               f"differ{'' if world.out.exists() else ' (no file)'}; {problems or 'ok'}",
               flush=True)
@@ -784,6 +838,17 @@ def _refusal_summary(results: dict) -> dict:
     return {"refusals": len(lines), "one_line": sum(n == 1 for n in lines)}
 
 
+def _without(value, tmp: str):
+    """``value`` with the scratch directory's path written as $TMP (no machine paths)."""
+    if isinstance(value, str):
+        return value.replace(tmp, "$TMP")
+    if isinstance(value, dict):
+        return {key: _without(item, tmp) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_without(item, tmp) for item in value]
+    return value
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenarios", default=",".join(DEFAULT_SCENARIOS),
@@ -818,12 +883,16 @@ def main():
     with tempfile.TemporaryDirectory(prefix="xbsm-race-") as tmp:
         world = World(Path(tmp), args.ground_ranges)
         for name in chosen:
-            begin = time.perf_counter()
+            begin, load_before = time.perf_counter(), os.getloadavg()[0]
             rows = globals()[f"scenario_{name}"](world, args)
             results[name] = {"machine": machine(), "commit": commit(),
                              "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
                              "seconds": round(time.perf_counter() - begin, 1),
+                             # other users' load on the machine: the latencies depend on it
+                             "load_average_1min": [round(load_before, 2),
+                                                   round(os.getloadavg()[0], 2)],
                              "settings": settings, "summary": summarize(rows), "tries": rows}
+        results = _without(results, tmp)
     previous = {}
     if args.out.exists():
         old = json.loads(args.out.read_text())
