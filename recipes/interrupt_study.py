@@ -749,6 +749,8 @@ def scenario_signals(world: World, args) -> list[dict]:
                 problems.append(f"rerun found {rerun.found_done()} chunks done of "
                                 f"{row['chunks_left']} left")
         row["problems"] = problems
+        if problems:
+            row["stderr"] = child.err  # all of it, to see where it went wrong
         rows.append(row)
         print(f"{row['signal']} {offset:.2f} s into {after} ({phase}): exit {child.code} "
               f"after {row['exit_latency_s']} s; file {row['file']['cells_differing']} cells "
