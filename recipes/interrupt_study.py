@@ -34,11 +34,13 @@ uninterrupted run of its own study. Scenarios (``--scenarios``, all but
     moments of the default study (``xbsm run -o out.nc``, figures drawn): half
     spread over writing the NetCDF file (timed from the child's own line "chunks
     computed: N of N (100 %)"), half over drawing the figures (timed from its
-    line "wrote out.nc"), both windows measured on an uninterrupted run. Each
-    must exit within 3 s with 130 / 143 (0 if it had finished), never hang
-    (killed after 30 s), print no traceback, leave no ``.partial`` file nor a
-    half-written figure; a file under the output's name must equal the
-    reference; a run stopped before its file exists is run again
+    line "wrote out.nc"), both windows measured on an uninterrupted run, and
+    SIGINT at ``--open-tries`` moments 5-100 ms after "wrote out.nc", where the
+    figures open the file (the review's swallowed Ctrl-C). Each must exit within
+    3 s with 130 / 143 (0 if it had finished), never hang (killed after 30 s),
+    print no traceback, not go on working after the signal and exit 0, leave no
+    ``.partial`` file nor a half-written figure; a file under the output's name
+    must equal the reference; a run stopped before its file exists is run again
     (``--no-figures``) and must reuse every chunk left and equal it.
 ``damage``
     After an interrupt, one ``block-*.npz`` is truncated, bit-flipped, or
@@ -66,7 +68,8 @@ run keep their previous entry in that file.
 Run from the repository root with the project environment::
 
     .venv/bin/python recipes/interrupt_study.py [--scenarios race,signals] [--race-tries 10]
-        [--signal-tries 30] [--sigterm-tries 4] [--damage-tries 1] [--compute-tries 20]
+        [--signal-tries 30] [--sigterm-tries 4] [--open-tries 8] [--damage-tries 1]
+        [--compute-tries 20]
 """
 
 from __future__ import annotations
@@ -704,6 +707,9 @@ def scenario_signals(world: World, args) -> list[dict]:
         f"{what} {length:.2f} s" for what, _, length in segments), flush=True)
     moments = [(signal.SIGINT, *m) for m in _moments(args.signal_tries, segments)]
     moments += [(signal.SIGTERM, *m) for m in _moments(args.sigterm_tries, segments)]
+    # densely where the figures open the file just written (the review's swallowed Ctrl-C)
+    moments += [(signal.SIGINT, *segments[1][:2], 0.005 + 0.1 * i / max(1, args.open_tries))
+                for i in range(args.open_tries)]
     rows = []
     for signum, after, line, offset in moments:
         world.clean()
@@ -735,6 +741,8 @@ def scenario_signals(world: World, args) -> list[dict]:
             problems.append(f"left {row['temporary_files']}")
         if any("Traceback" in line for line in child.err):
             problems.append("a traceback")
+        if sent and child.code == 0 and any(t > at + 0.05 for t, *_ in child.lines):
+            problems.append("the signal was ignored: output after it, then exit 0")
         if world.out.exists():
             row["file"] = differing_cells(world.out, reference)
             if not row["file"]["equal"]:
@@ -864,6 +872,8 @@ def main():
                              "40 scenarios a chunk); the review used the database's 97")
     parser.add_argument("--signal-tries", type=int, default=30, help="SIGINT moments")
     parser.add_argument("--sigterm-tries", type=int, default=4, help="SIGTERM moments")
+    parser.add_argument("--open-tries", type=int, default=8,
+                        help="SIGINT moments 5-100 ms after 'wrote OUT.nc' (the figures open it)")
     parser.add_argument("--damage-tries", type=int, default=1,
                         help="tries of each database, version and damage variant")
     parser.add_argument("--interrupt-percent", type=int, default=40,
