@@ -1,7 +1,8 @@
 """Studies: lazy build, safe resumable writing, range performance (xbsm.study)."""
 
 import math
-import os
+import subprocess
+import sys
 
 import dask
 import numpy as np
@@ -167,7 +168,7 @@ def test_parts_of_another_fingerprint_are_set_aside_never_mixed(tiny, tmp_path, 
     assert sorted(f.name for f in aside.glob("block-*.npz")) == sorted(first)
 
 
-@pytest.mark.parametrize("damage", ["truncate", "flip"])
+@pytest.mark.parametrize("damage", ["truncate", "flip", "swap"])
 def test_a_damaged_chunk_file_is_computed_again(tiny, tmp_path, monkeypatch, capsys, damage):
     path = tmp_path / "out.nc"
     first = []
@@ -176,7 +177,9 @@ def test_a_damaged_chunk_file_is_computed_again(tiny, tmp_path, monkeypatch, cap
         study.write(study.run(tiny), path, scheduler="synchronous")
     victim = tmp_path / "out.nc.parts" / first[0]
     data = bytearray(victim.read_bytes())
-    if damage == "truncate":
+    if damage == "swap":  # the other chunk's whole file under this chunk's name
+        data = bytearray((tmp_path / "out.nc.parts" / first[1]).read_bytes())
+    elif damage == "truncate":
         data = data[: len(data) // 2]
     else:  # one bit of the stored SNR values (npz members are stored uncompressed)
         with np.load(victim) as saved:
@@ -194,12 +197,33 @@ def test_a_damaged_chunk_file_is_computed_again(tiny, tmp_path, monkeypatch, cap
 
 
 def test_a_second_writer_of_one_output_is_refused(tiny, tmp_path):
+    # another process holds the output's lock (the lock is re-entrant within a process)
     path = tmp_path / "out.nc"
-    with OutputLock(path, "study A"), pytest.raises(study.StudyError) as err:
-        study.write(study.run(tiny), path, scheduler="synchronous")
+    holder = subprocess.Popen(
+        [sys.executable, "-c", "import sys, time; from pathlib import Path; "
+         "from xbsm.study._lock import OutputLock\n"
+         "with OutputLock(Path(sys.argv[1]), 'study A'):\n"
+         "    print('locked', flush=True); time.sleep(60)", str(path)],
+        stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "locked"
+        with pytest.raises(study.StudyError) as err:
+            study.write(study.run(tiny), path, scheduler="synchronous")
+    finally:
+        holder.kill()
+        holder.communicate()
     message = str(err.value)
-    assert f"process {os.getpid()}" in message and "study A" in message
+    assert f"process {holder.pid}" in message and "study A" in message
     assert "\n" not in message and not path.exists()
+
+
+def test_the_lock_is_reentrant_within_a_process(tiny, tmp_path):
+    # the command holds it from before the study is built, and write() takes it again
+    path = tmp_path / "out.nc"
+    with OutputLock(path, "study A"):
+        study.write(study.run(tiny), path, scheduler="synchronous")
+        assert (tmp_path / "out.nc.lock").exists()
+    assert path.exists() and not (tmp_path / "out.nc.lock").exists()
 
 
 def test_the_lock_of_a_dead_process_is_taken_over(tiny, tmp_path):

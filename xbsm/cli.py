@@ -44,15 +44,17 @@ def run(study_file: Path | None, out: Path | None, *, overwrite=False, scheduler
     warning line saying how to draw them (:func:`_draw_or_warn`).
     """
     from . import study
+    from .study._lock import OutputLock
     from .study.store import check_output
 
     spec = study.load(study_file or default_study_path())
     out = out or Path(spec.output or (Path(study_file or DEFAULT_STUDY).stem + ".nc"))
     check_output(out, overwrite, study_file)  # before any work
-    result = study.run(spec)
-    stop_if_interrupted()
-    study.write(result, out, overwrite=overwrite, scheduler=scheduler or spec.scheduler,
-                workers=workers or spec.workers, progress=progress)
+    with OutputLock(out, spec.title):  # a second run on this output is refused at once
+        result = study.run(spec)
+        stop_if_interrupted()
+        study.write(result, out, overwrite=overwrite, scheduler=scheduler or spec.scheduler,
+                    workers=workers or spec.workers, progress=progress)
     print(f"wrote {out}")
     if figures:
         _draw_or_warn(out, _figure_dir(out))

@@ -51,8 +51,16 @@ def _owner_text(fd: int) -> str:
         return "another process"
 
 
+#: Lock files this process holds, with how many nested holders each has.
+_HELD: dict = {}
+
+
 class OutputLock:
-    """Exclusive right to write one output (and its parts) for the life of a run."""
+    """Exclusive right to write one output (and its parts) for the life of a run.
+
+    Re-entrant within a process: the command takes it before it builds the study
+    (so a second run is refused at once) and :func:`xbsm.study.write` again.
+    """
 
     def __init__(self, output: Path, study: str):
         self.path = lock_path(output)
@@ -61,6 +69,11 @@ class OutputLock:
         self.fd = None
 
     def __enter__(self) -> OutputLock:
+        key = os.path.abspath(self.path)
+        if key in _HELD:
+            _HELD[key][1] += 1
+            self.fd = _HELD[key][0]
+            return self
         while True:
             try:
                 fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
@@ -85,9 +98,15 @@ class OutputLock:
         os.ftruncate(fd, 0)
         os.lseek(fd, 0, os.SEEK_SET)
         os.write(fd, json.dumps(owner).encode())
+        _HELD[key] = [fd, 1]
         return self
 
     def __exit__(self, *exc) -> None:
+        key = os.path.abspath(self.path)
+        _HELD[key][1] -= 1
+        if _HELD[key][1]:
+            return
+        del _HELD[key]
         try:
             self.path.unlink(missing_ok=True)  # while still holding it (see the module)
         finally:

@@ -3,7 +3,8 @@
 A chunk file ``block-I-J-….npz`` holds, for one chunk of the scenario grid, the
 blocks of every variable that chunk owns (a variable without a grid dimension is
 saved once, by the chunks at index 0 along it), plus a SHA-256 digest of the
-fingerprint of the run and of every array. It is written under a temporary name,
+fingerprint of the run, of the file's own name (a chunk copied under another
+chunk's name does not verify) and of every array. It is written under a temporary name,
 synced and renamed, so it is whole or absent; one that does not verify is
 recomputed, never trusted. ``study.json`` holds the fingerprint (every input
 that determines the numbers, see :func:`fingerprint`): parts made by a run with
@@ -95,7 +96,7 @@ def fingerprint(result: xr.Dataset) -> dict[str, str]:
     attrs = {key: str(value) for key, value in result.attrs.items() if key != "date_created"}
     return {"layout": _layout(result),
             "study": hashlib.sha256(json.dumps(attrs, sort_keys=True).encode()).hexdigest(),
-            "atmosphere": atmosphere_checksum(), "xbsm": f"{__version__} {code_commit()}".strip(),
+            "atmosphere": atmosphere_checksum(), "xbsm": __version__,
             "code": code_checksum(), "numpy": np.__version__, "scipy": scipy.__version__}
 
 
@@ -150,7 +151,7 @@ def _digest_arrays(print_digest: str, arrays: dict) -> str:
 
 def save(file: Path, arrays: dict, print_: dict) -> None:
     """Save one chunk's arrays with their digest: whole (synced, then renamed) or absent."""
-    digest = _digest_arrays(_digest_of(print_), arrays)
+    digest = _digest_arrays(_digest_of(print_) + file.name, arrays)
     partial = file.with_name(file.name + ".tmp")
     with open(partial, "wb") as handle:
         np.savez(handle, **arrays, **{_DIGEST: np.array(digest)})
@@ -167,7 +168,7 @@ def load(file: Path, print_: dict) -> dict | None:
     except Exception:  # noqa: BLE001: any failure to read it (truncated, bit flips) is damage
         return None
     digest = arrays.pop(_DIGEST, None)
-    if digest is None or str(digest) != _digest_arrays(_digest_of(print_), arrays):
+    if digest is None or str(digest) != _digest_arrays(_digest_of(print_) + file.name, arrays):
         return None
     return arrays
 

@@ -8,6 +8,7 @@ done, so a log holds tens of lines, not thousands of carriage returns.
 from __future__ import annotations
 
 import sys
+import threading
 import time
 
 
@@ -22,9 +23,14 @@ class Progress:
         self.terminal = self.enabled and getattr(self.stream, "isatty", lambda: False)()
         self.step, self.next_report = step, step
         self.started = time.monotonic()
+        self._lock = threading.Lock()  # chunks finish on several threads
 
     def add(self, count: int = 1) -> None:
         """``count`` more items finished."""
+        with self._lock:
+            self._add(count)
+
+    def _add(self, count: int) -> None:
         self.done += count
         if not self.enabled:
             return

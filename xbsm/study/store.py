@@ -264,9 +264,9 @@ def _assemble(result, grid, parts, print_, path: Path, progress: bool) -> None:
              "xbsm_code_sha256": _parts.code_checksum(), "xbsm_commit": code_commit() or None,
              "xbsm_dependencies": dependency_versions(),
              "date_created": np.datetime_as_string(np.datetime64("now", "s")) + "Z"}
+    skeleton = _skeleton(result, attrs)  # may compute coordinates: interruptible, no file yet
     try:
         with deferred():  # a signal stops the writing between two chunks, never inside one
-            skeleton = _skeleton(result, attrs)
             skeleton.to_netcdf(partial, engine="netcdf4",
                                encoding={name: {"_FillValue": None} for name in skeleton.variables})
             _stream(result, grid, parts, print_, partial, Progress(
