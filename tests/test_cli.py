@@ -191,3 +191,25 @@ def test_progress_off_a_terminal_is_a_line_per_ten_percent(tmp_path):
     # one line of what is done, then at most 10 per phase (computing, writing the file)
     assert len(lines) <= 21 and sum("chunks computed" in line for line in lines) <= 10
     assert lines[-1].endswith(")") and "100 %" in lines[-1]
+
+
+def test_a_write_that_fails_is_one_line_naming_the_file_and_keeps_the_chunks(tmp_path):
+    # a real failed write (the kernel refuses to grow the file past RLIMIT_FSIZE, as a
+    # full disk refuses it): one line with the file and the free space, exit 2, no
+    # output, no .partial, every chunk kept for the next run
+    import resource
+
+    def limit_file_size():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # EFBIG instead of death
+        resource.setrlimit(resource.RLIMIT_FSIZE, (60_000, 60_000))
+
+    study = _study(tmp_path, FORTY_EIGHT_CHUNKS)
+    out = tmp_path / "out.nc"
+    done = subprocess.run([sys.executable, "-m", "xbsm.cli", "run", str(study), "-o", str(out),
+                           "--no-figures"], capture_output=True, text=True, timeout=300,
+                          preexec_fn=limit_file_size)
+    assert done.returncode == 2
+    last = done.stderr.strip().splitlines()[-1]
+    assert last.startswith(f"xbsm run: cannot write {out}.partial: ") and "MB free" in last
+    assert not out.exists() and not (tmp_path / "out.nc.partial").exists()
+    assert len(list((tmp_path / "out.nc.parts").glob("block-*.npz"))) == 48
