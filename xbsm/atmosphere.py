@@ -76,7 +76,7 @@ from ._metadata import named
 from .constants import EARTH_RADIUS
 from .flags import flag, flag_attrs
 from .geometry import slant_range, target_elevation_angle
-from .quadrature import _legendre
+from .quadrature import legendre_nodes
 from .units import in_units
 
 __all__ = [
@@ -376,7 +376,7 @@ def _extinction_profile(db) -> _ExtinctionProfile:
         exists = np.isfinite(mean + bottom + top) & (mean > 0.0) & (bottom > 0.0) & (top > 0.0)
         slope = np.where(exists, np.log(top / bottom), 0.0)
         relative = np.where(exists, mean / bottom, 1.0)  # the mean of exp(slope s + bulge ...)
-    nodes, weights = _legendre(_PROFILE_FIT_NODES)
+    nodes, weights = legendre_nodes(_PROFILE_FIT_NODES)
     s = 0.5 * (nodes + 1.0)
     s_bulge, weights = s * (1.0 - s), 0.5 * weights
     bulge = np.zeros_like(slope)
@@ -735,7 +735,7 @@ def _nadir_factor(vis, a, nadir, profile):
     interval = np.minimum(a[0] + 1, profile.slope.shape[1] - 1)
     slope, bulge, mean, exists = (f[vis, interval] for f in (profile.slope, profile.bulge,
                                                              profile.mean, profile.exists))
-    nodes, weights = _legendre(_PROFILE_NODES)
+    nodes, weights = legendre_nodes(_PROFILE_NODES)
     position = nadir.position[:, None]
     s = 0.5 * position[..., None] * (nodes + 1.0)  # Gauss-Legendre on [0, position]
     inside = np.exp(slope[..., None] * s + bulge[..., None] * (s * (1.0 - s))) @ weights
