@@ -54,6 +54,7 @@ def _as_position(position):
 
 
 def check_slice(otf_slice, weights):
+    """Raise ValueError unless ``otf_slice`` (and ``weights``) can feed an edge response."""
     if not isinstance(otf_slice, xr.DataArray) or "frequency" not in otf_slice.dims:
         raise ValueError("otf_slice must be an xr.DataArray with a 'frequency' dimension")
     if weights is None:
