@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .. import __version__, flags
+from .. import flags
+from .._version import __version__
 from ..interrupts import stop_if_interrupted
 from ._layout import Curves, layout_of, plot_against
 from ._panels import (
