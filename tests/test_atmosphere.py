@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import inspect
 import json
 import zlib
 from pathlib import Path
@@ -17,8 +18,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import quad
 
+import xbsm
+from xbsm import _chain, geometry
 from xbsm import atmosphere as atm
-from xbsm import geometry
+from xbsm.examples import olson_scenario, olson_sensor
 from xbsm.flags import FLAGS, has_flag
 
 FIXTURES = Path(__file__).parent / "fixtures"
@@ -232,7 +235,7 @@ def test_leave_one_out_altitude_log_value_log_altitude_beats_linear(db):
 
 
 def test_log_linear_between_nodes_is_bounded_by_the_bracketing_tables(db):
-    out = atm.atmosphere_at(1500.0, 10500.0, 5.0)
+    out = atm.atmosphere_at(1500.0, 10500.0, 5.0, interpolation="log-linear")
     corners = np.stack([db.cube[1, a, g].astype(float) for a in (6, 7) for g in (12, 13)])
     values = np.stack([out[n].values for n in atm.VARIABLES])
     # low * exp(w * log(high / low)) may round one ulp past a bracketing value
@@ -548,6 +551,66 @@ def test_invalid_input_raises_value_error_naming_the_parameter(kwargs, message):
     args = {"altitude": 1000.0, "ground_range": 10000.0, "visibility": 23.0, **kwargs}
     with pytest.raises(ValueError, match=message):
         atm.atmosphere_at(**args)
+
+
+# --- atmosphere_at: the default rule is the model's -----------------------------------------
+
+# off-node in altitude and ground range, both visibilities, inside every horizon
+_OFF_NODE = {"altitude": [1234.5, 7321.0, 15500.0], "ground_range": [3456.7, 41234.0, 88765.0],
+             "visibility": [23.0, 5.0, 23.0]}
+
+
+def _chain_atmosphere(scenario):
+    """The band atmosphere ``xbsm.snr`` uses by default on the Olson sensor, by wavelength."""
+    m = xbsm.method(inspect.signature(xbsm.snr).parameters["method"].default)
+    ap = _chain.applier(olson_sensor(), scenario)
+    with ap.errors():
+        out = ap.atmosphere(m)
+    if isinstance(out, xr.Dataset):  # the labelled applier: scenario dims first
+        out = out.transpose(..., "wavelength")
+    return {name: np.asarray(out[name]) for name in ("wavelength", *atm.VARIABLES)}
+
+
+def _default_at_chain_wavelengths(chain, altitude, ground_range, visibility):
+    """``atmosphere_at`` with its default rule at the chain's interior database wavelengths."""
+    wl = chain["wavelength"]
+    out = atm.atmosphere_at(altitude, ground_range, visibility, wavelength_bounds=(wl[1], wl[-2]))
+    np.testing.assert_array_equal(out["wavelength"].values, wl[1:-1])  # database samples
+    return out
+
+
+def test_default_rule_is_the_one_snr_uses_on_single_off_node_scenarios():
+    # issue 22: atmosphere_at defaulted to "log-linear" while xbsm.snr used the
+    # "extinction-profile" of its default preset, so radiometry built from atmosphere_at
+    # did not match xbsm.snr; the chain's direct applier runs one scenario
+    for altitude, ground_range, visibility in zip(*_OFF_NODE.values(), strict=True):
+        scenario = olson_scenario(altitude=altitude, ground_range=ground_range,
+                                  visibility=visibility)
+        assert isinstance(_chain.applier(olson_sensor(), scenario), _chain.Direct)
+        chain = _chain_atmosphere(scenario)
+        out = _default_at_chain_wavelengths(chain, altitude, ground_range, visibility)
+        old = atm.atmosphere_at(altitude, ground_range, visibility, interpolation="log-linear",
+                                wavelength_bounds=(chain["wavelength"][1],
+                                                   chain["wavelength"][-2]))
+        for name in atm.VARIABLES:
+            np.testing.assert_allclose(out[name].values, chain[name][1:-1], rtol=1e-13, atol=0,
+                                       err_msg=name)
+        # the scenarios tell the rules apart: the old default would fail here
+        assert not np.allclose(old["transmission"].values, chain["transmission"][1:-1],
+                               rtol=1e-6, atol=0)
+        assert out.attrs["interpolation"] == xbsm.method().atmosphere_interpolation
+
+
+def test_default_rule_is_the_one_snr_uses_on_a_sweep():
+    # the labelled applier (a sweep over dim "case") reads the same rule
+    case = {name: xr.DataArray(values, dims="case") for name, values in _OFF_NODE.items()}
+    scenario = olson_scenario(**case)
+    assert isinstance(_chain.applier(olson_sensor(), scenario), _chain.Labelled)
+    chain = _chain_atmosphere(scenario)
+    out = _default_at_chain_wavelengths(chain, *case.values())
+    for name in atm.VARIABLES:
+        np.testing.assert_allclose(out[name].transpose("case", "wavelength").values,
+                                   chain[name][:, 1:-1], rtol=1e-13, atol=0, err_msg=name)
 
 
 # --- atmosphere_at: broadcasting, band selection, laziness -------------------------------------

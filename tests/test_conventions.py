@@ -153,6 +153,16 @@ NOT_LABELLED = MappingProxyType({
     "xbsm.quadrature.undersampled": "returns a boolean mask that feeds a flag",
     "xbsm.metrics.giqe.giqe_calibrations": "returns a table of calibrations",
     "xbsm.otf.system.spectral_bins": "internal binning of the polychromatic OTF",
+    "xbsm.metrics.edge.check_slice": "a validator: raises or returns None",
+    "xbsm.otf.spectral.is_lazy": "returns a bool",
+    **{f"xbsm.otf.{name}": "a kernel: plain numpy arrays in and out, composed by "
+       "xbsm.otf.system (labelled by the mechanism's public function)"
+       for name in ("aperture.circular_aperture_kernel", "detector.detector_kernel",
+                    "filters.dtft_filter_kernel", "filters.pybsm_filter_kernel",
+                    "motion.drift_kernel", "motion.jitter_kernel",
+                    "spectral.weighted_sum_kernel", "turbulence.band_kernel",
+                    "turbulence.polychromatic_kernel", "turbulence.slant_path_kernel",
+                    "wavefront.random_phase_kernel")},
     **{f"xbsm.{name}": "a stage's array orchestrator: plain arrays in and out, labelled by "
        "xbsm._chain from the stage's declared outputs (tests/test_chain.py)"
        for name in ("atmosphere.band_atmosphere_arrays", "geometry.viewing_arrays",

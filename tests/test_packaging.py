@@ -37,3 +37,18 @@ def test_build_requires_a_setuptools_that_reads_spdx_licenses():
     requires = _pyproject()["build-system"]["requires"]
     floor = [re.fullmatch(r"setuptools>=(\d+)(?:\.\d+)*", r) for r in requires]
     assert any(m and int(m.group(1)) >= 77 for m in floor), requires
+
+
+def test_the_version_has_one_home():
+    # issue 22: submodules read the version back from the lazy package root; it now lives
+    # in xbsm/_version.py, which pyproject.toml, xbsm.__version__ and the submodules read
+    import importlib.metadata
+
+    import xbsm
+    from xbsm import _version
+
+    project = _pyproject()
+    assert "version" not in project["project"] and "version" in project["project"]["dynamic"]
+    assert project["tool"]["setuptools"]["dynamic"]["version"] == {
+        "attr": "xbsm._version.__version__"}
+    assert xbsm.__version__ == _version.__version__ == importlib.metadata.version("xbsm")

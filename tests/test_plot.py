@@ -510,7 +510,7 @@ def test_noise_figure_of_a_study_splits_self_emission_by_source():
     text = (f"[sensor]\n{sensor}\n[scenario]\naltitude = 3000.0\nvisibility = 23.0\n"
             "[sweep]\nground_range = [5000.0, 20000.0]\n")
     result = st.run(st.parse(text)).compute()
-    figures = dict(plot_figures._noise_figure(result, plot_figures._context(result)))
+    figures = dict(plot_figures._noise_figure(result, plot_figures.context_of(result)))
     labels = _tick_texts(figures["figure4_noise.png"].axes[0])
     assert {"cold shield", "optics emission", "cold filter emission", "stray light"} <= set(
         labels)

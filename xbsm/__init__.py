@@ -16,7 +16,7 @@ before numpy, xarray and dask are imported.
 
 import importlib
 
-__version__ = "0.1.0"
+from ._version import __version__ as __version__  # re-exported: the one home is _version
 
 #: Public name -> the module that defines it (a submodule is its own entry).
 _PUBLIC = {

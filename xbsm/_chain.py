@@ -65,7 +65,7 @@ def _snr_chain(ap, m, targets: str):
     noise_ = ap.noise(signal)
     brighter = np.maximum(signal["target_photoelectrons"], signal["background_photoelectrons"])
     flags = ap.flag(atm["flags"], "well_fill_limited", signal["well_fill_scale"] < 1.0)
-    if params._partial_spectral_coverage(ap.sensor_dataset):  # one bit for the whole sensor
+    if params.partial_spectral_coverage(ap.sensor_dataset):  # one bit for the whole sensor
         flags = ap.flag(flags, "partial_spectral_coverage", True)
     counts = ("effective_integration_time", "target_photoelectrons",
               "background_photoelectrons", "contrast_photoelectrons")

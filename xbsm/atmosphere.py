@@ -13,7 +13,7 @@ Interpolation between database nodes (``interpolation=``):
 ``"linear"``
     pyBSM 0.16.1's ``load_database_atmosphere`` rule, bit for bit: linear in
     altitude at the two bracketing ground ranges, then linear in ground range.
-``"log-linear"`` (default of :func:`atmosphere_at`)
+``"log-linear"``
     The same two steps on the logarithm of each value (transmittance falls
     exponentially with path length), with the altitude weight linear in
     log(altitude); linear in the value where a bracketing value is zero.
@@ -38,7 +38,8 @@ Interpolation between database nodes (``interpolation=``):
     database floor) gives a one-sided slope (the secant without either outer
     table); the bracketing tables, the path radiances, the fallback and its flag
     are ``"same-elevation"``'s, and so is the value where a bracketing value is zero.
-``"extinction-profile"`` (default of the ``accurate`` and ``fast`` presets)
+``"extinction-profile"`` (default of the ``accurate`` and ``fast`` presets, so of
+:func:`atmosphere_at`)
     ``"optical-depth-cubic"`` with its increment over the lower bracketing table scaled
     so that, straight down, it equals the vertical optical depth of an extinction
     profile built from the tables' nadir columns: in each interval between tables,
@@ -75,7 +76,7 @@ from ._metadata import named
 from .constants import EARTH_RADIUS
 from .flags import flag, flag_attrs
 from .geometry import slant_range, target_elevation_angle
-from .quadrature import _legendre
+from .quadrature import legendre_nodes
 from .units import in_units
 
 __all__ = [
@@ -375,7 +376,7 @@ def _extinction_profile(db) -> _ExtinctionProfile:
         exists = np.isfinite(mean + bottom + top) & (mean > 0.0) & (bottom > 0.0) & (top > 0.0)
         slope = np.where(exists, np.log(top / bottom), 0.0)
         relative = np.where(exists, mean / bottom, 1.0)  # the mean of exp(slope s + bulge ...)
-    nodes, weights = _legendre(_PROFILE_FIT_NODES)
+    nodes, weights = legendre_nodes(_PROFILE_FIT_NODES)
     s = 0.5 * (nodes + 1.0)
     s_bulge, weights = s * (1.0 - s), 0.5 * weights
     bulge = np.zeros_like(slope)
@@ -734,7 +735,7 @@ def _nadir_factor(vis, a, nadir, profile):
     interval = np.minimum(a[0] + 1, profile.slope.shape[1] - 1)
     slope, bulge, mean, exists = (f[vis, interval] for f in (profile.slope, profile.bulge,
                                                              profile.mean, profile.exists))
-    nodes, weights = _legendre(_PROFILE_NODES)
+    nodes, weights = legendre_nodes(_PROFILE_NODES)
     position = nadir.position[:, None]
     s = 0.5 * position[..., None] * (nodes + 1.0)  # Gauss-Legendre on [0, position]
     inside = np.exp(slope[..., None] * s + bulge[..., None] * (s * (1.0 - s))) @ weights
@@ -910,7 +911,7 @@ def _wavelength_window(wavelength, bounds):
     return slice(int(index[0]), int(index[-1]) + 1)
 
 
-def atmosphere_at(altitude, ground_range, visibility, *, interpolation="log-linear",
+def atmosphere_at(altitude, ground_range, visibility, *, interpolation=None,
                   wavelength_bounds=None, path=None) -> xr.Dataset:
     """Atmospheric transmittance and path radiances for each scenario.
 
@@ -922,10 +923,13 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation="log-line
         Ground range from the sensor nadir point to the target, within [0, 300000]. [m]
     visibility : float or xr.DataArray
         Meteorological range: 23 (MODTRAN IHAZE 1) or 5 (IHAZE 2). [km]
-    interpolation : {"log-linear", "linear", "exact", "same-elevation", "optical-depth-cubic", \
-"extinction-profile"}
-        Rule between database nodes; see the module docstring. The model's presets
-        use "extinction-profile" (``accurate``, ``fast``) and "linear" (``pybsm``).
+    interpolation : {"extinction-profile", "optical-depth-cubic", "same-elevation", \
+"log-linear", "linear", "exact"}, optional
+        Rule between database nodes; see the module docstring. Default: the rule of the
+        default ``accurate`` preset, ``xbsm.method().atmosphere_interpolation``
+        ("extinction-profile"), so that the spectra are the ones :func:`xbsm.snr` and
+        :func:`xbsm.niirs` use by default. The ``pybsm`` preset's rule is "linear"
+        (``xbsm.method("pybsm").atmosphere_interpolation``).
     wavelength_bounds : tuple of float, optional
         ``(lo, hi)``: keep the database wavelengths ``lo <= w <= hi`` (exact float
         comparison, as pyBSM selects a band); only these are interpolated. [m]
@@ -956,6 +960,10 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation="log-line
     inputs give dask-backed results; nothing is computed until asked. The
     database itself is read into memory once per process (netCDF4, no dask).
     """
+    if interpolation is None:
+        from .methods import PRESETS  # methods imports this module
+
+        interpolation = PRESETS["accurate"].atmosphere_interpolation
     if interpolation not in _RULES:
         raise ValueError(
             f"interpolation must be one of {', '.join(map(repr, INTERPOLATIONS))}; "

@@ -132,7 +132,7 @@ def _draw_or_warn(result_file: Path, directory: Path) -> list[Path]:
 
 def info() -> None:
     """Print the atmosphere coverage, the method presets and the versions."""
-    from . import __version__
+    from ._version import __version__
     from .atmosphere import database_path, open_atmosphere
     from .methods import PRESETS
     from .study.store import dependency_versions

@@ -302,7 +302,7 @@ def _check_band_overlap(name: str, curve: xr.DataArray, low: float, high: float)
         raise ValueError(f"{name} is zero over the whole band [{low:g}, {high:g}] m: no signal")
 
 
-def _partial_spectral_coverage(sensor: xr.Dataset) -> bool:
+def partial_spectral_coverage(sensor: xr.Dataset) -> bool:
     """Whether a spectral curve of ``sensor`` covers only part of its band.
 
     Such a curve is legitimate (it is zero outside its own wavelengths), but the

@@ -208,7 +208,7 @@ def gauss_legendre_rule(edges, nodes_per_panel: int):
 
 
 @functools.lru_cache(maxsize=16)
-def _legendre(n):
+def legendre_nodes(n):
     """Gauss-Legendre nodes and weights on [-1, 1] (read-only, cached: a few per process)."""
     t, v = np.polynomial.legendre.leggauss(n)
     for a in (t, v):
@@ -218,7 +218,7 @@ def _legendre(n):
 
 def _gauss_legendre_kernel(edges, nodes_per_panel):
     """Nodes and weights of :func:`gauss_legendre_rule` (numpy)."""
-    t, v = _legendre(int(nodes_per_panel))
+    t, v = legendre_nodes(int(nodes_per_panel))
     a, b = edges[:-1, None], edges[1:, None]
     return ((a + b) / 2 + (b - a) / 2 * t).ravel(), ((b - a) / 2 * v).ravel()
 

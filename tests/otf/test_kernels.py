@@ -11,7 +11,7 @@ from xbsm.otf.system import _product_kernel
 
 def test_aperture_kernel_takes_plain_arrays_and_matches_the_unobscured_closed_form():
     nu = np.linspace(0.0, 1.2, 13)
-    out = aperture._circular_aperture_kernel(nu * 0.1 / 0.5e-6, 0.1, 0.5e-6, 0.0)
+    out = aperture.circular_aperture_kernel(nu * 0.1 / 0.5e-6, 0.1, 0.5e-6, 0.0)
     # closed form, IBSM Eq. 3-20 with eta = 0: (2/pi)(acos nu - nu sqrt(1 - nu^2)), 0 beyond 1
     c = np.minimum(nu, 1.0)
     expected = (2 / np.pi) * (np.arccos(c) - c * np.sqrt(1 - c**2))
@@ -22,7 +22,7 @@ def test_aperture_kernel_takes_plain_arrays_and_matches_the_unobscured_closed_fo
 def test_polychromatic_kernel_of_one_wavelength_is_the_wind_blended_closed_form():
     radial = np.linspace(0.0, 4e5, 9)
     lam, r0_ref, t, v, d = 0.6e-6, 0.05, 0.01, 100.0, 0.275
-    out = turbulence._polychromatic_kernel(radial, r0_ref, t, v, d, 1e-6,
+    out = turbulence.polychromatic_kernel(radial, r0_ref, t, v, d, 1e-6,
                                            np.array([lam]), np.array([3.0]))
     # closed form, IBSM Eqs. 3-3 and 3-9 with r0 scaled as lambda^(6/5) from 1 um
     r0 = r0_ref * (lam / 1e-6) ** 1.2
@@ -48,7 +48,7 @@ def test_polychromatic_kernel_does_not_depend_on_its_blocks(monkeypatch, block):
         expected += norm[:, i] * turbulence._wind_blended_kernel(
             radial, lam, d, turbulence._scale_kernel(r0_ref, lam, 1e-6), t, v)
     monkeypatch.setattr(turbulence, "_BLOCK", block)
-    out = turbulence._polychromatic_kernel(radial, r0_ref, t, v, d, 1e-6, wl, weights)
+    out = turbulence.polychromatic_kernel(radial, r0_ref, t, v, d, 1e-6, wl, weights)
     # a few ulp: numpy's vector and scalar loops of pow and exp may round differently
     # (1.5e-15 seen with numpy 1.24)
     np.testing.assert_allclose(out, expected, rtol=1e-14, atol=0)
@@ -57,7 +57,7 @@ def test_polychromatic_kernel_does_not_depend_on_its_blocks(monkeypatch, block):
 def test_polychromatic_kernel_of_scalars_is_a_scalar():
     # one frequency, one scenario: the two-wavelength sum written out
     wl, w = np.array([0.5e-6, 0.6e-6]), np.array([1.0, 2.0])
-    out = turbulence._polychromatic_kernel(np.float64(1e5), 0.05, 0.01, 100.0, 0.1, 1e-6, wl, w)
+    out = turbulence.polychromatic_kernel(np.float64(1e5), 0.05, 0.01, 100.0, 0.1, 1e-6, wl, w)
     expected = sum(w[i] / 3.0 * turbulence._wind_blended_kernel(
         1e5, lam, 0.1, turbulence._scale_kernel(0.05, lam, 1e-6), 0.01, 100.0)
         for i, lam in enumerate(wl))

@@ -53,7 +53,8 @@ def _as_position(position):
     return xr.DataArray(arr, dims="position", coords={"position": arr})
 
 
-def _check_slice(otf_slice, weights):
+def check_slice(otf_slice, weights):
+    """Raise ValueError unless ``otf_slice`` (and ``weights``) can feed an edge response."""
     if not isinstance(otf_slice, xr.DataArray) or "frequency" not in otf_slice.dims:
         raise ValueError("otf_slice must be an xr.DataArray with a 'frequency' dimension")
     if weights is None:
@@ -119,7 +120,7 @@ def _apply_edge(kernel, otf_slice, weights, *args, n_out=1, **knobs):
     coordinate); it may carry sensor dimensions besides ``frequency`` when every sensor of a
     sweep has nodes of its own. Auxiliary coordinates of the OTF and the weights are dropped.
     """
-    _check_slice(otf_slice, weights)
+    check_slice(otf_slice, weights)
     abscissa = weights.coords["sine_frequency"] if "sine_frequency" in weights.coords else (
         weights["frequency"])
     dtype = np.result_type(np.finfo(otf_slice.dtype).dtype, weights.dtype,

@@ -13,8 +13,8 @@ import xarray as xr
 
 from .. import flags as _flags
 from .._metadata import named
-from .edge import _check_slice
-from .pybsm_numerics import _np_interp_reversed
+from .edge import check_slice
+from .pybsm_numerics import np_interp_reversed
 
 __all__ = ["ground_resolved_distance"]
 
@@ -91,7 +91,7 @@ def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first
 
     .. math:: GRD = R\,\max\left(\frac{1}{u_r},\ 2\theta\right)
     """
-    _check_slice(otf_slice, None)
+    check_slice(otf_slice, None)
     if not np.all(np.diff(np.asarray(otf_slice["frequency"].values)) > 0):
         raise ValueError("otf_slice's frequency coordinate must increase strictly")
     if not np.all(np.asarray(ifov) >= 0):
@@ -107,7 +107,7 @@ def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first
         threshold = 3.0 / snr
     if method == "pybsm":
         n = mtf.sizes["frequency"]
-        u_r = _np_interp_reversed(mtf, freq, threshold, n) + 1e-12
+        u_r = np_interp_reversed(mtf, freq, threshold, n) + 1e-12
         with np.errstate(divide="ignore"):
             grd = slant_range * np.maximum(1.0 / u_r, 2.0 * ifov)
         grd = grd.where(snr > 0)  # pyBSM raises at SNR 0; no SNR <= 0 resolves anything

@@ -28,7 +28,7 @@ import xarray as xr
 __all__: list[str] = []
 
 
-def _np_interp_reversed(mtf, freq, threshold, n):
+def np_interp_reversed(mtf, freq, threshold, n):
     """``numpy.interp(threshold, mtf[::-1], freq[::-1])``, vectorised.
 
     Reproduces NumPy's search (a guess-then-bisect lookup that assumes

@@ -72,12 +72,12 @@ def circular_aperture(fx, fy, wavelength, aperture_diameter, obscuration_ratio=0
 
 
 def _circular_aperture_xy_kernel(fx, fy, aperture_diameter, wavelength, obscuration_ratio):
-    """:func:`_circular_aperture_kernel` at the radial frequency of ``fx``, ``fy`` (numpy)."""
-    return _circular_aperture_kernel(np.hypot(fx, fy), aperture_diameter, wavelength,
+    """:func:`circular_aperture_kernel` at the radial frequency of ``fx``, ``fy`` (numpy)."""
+    return circular_aperture_kernel(np.hypot(fx, fy), aperture_diameter, wavelength,
                                      obscuration_ratio)
 
 
-def _circular_aperture_kernel(radial, aperture_diameter, wavelength, obscuration_ratio):
+def circular_aperture_kernel(radial, aperture_diameter, wavelength, obscuration_ratio):
     """IBSM Eq. 3-20 on plain arrays: radial frequency [cycles/rad], D [m], lambda [m], eta [1].
 
     Entries with eta = 0 reduce to the unobscured term exactly (the obscured terms

@@ -38,11 +38,11 @@ def detector(fx, fy, detector_width_x, detector_width_y, focal_length):
     _positive("detector_width_x", detector_width_x)
     _positive("detector_width_y", detector_width_y)
     _positive("focal_length", focal_length)
-    out = apply_kernel(_detector_kernel, detector_width_x, focal_length, fx, detector_width_y, fy)
+    out = apply_kernel(detector_kernel, detector_width_x, focal_length, fx, detector_width_y, fy)
     return described(out, detector)
 
 
-def _detector_kernel(detector_width_x, focal_length, fx, detector_width_y, fy):
+def detector_kernel(detector_width_x, focal_length, fx, detector_width_y, fy):
     """IBSM Eq. 3-36 on plain arrays (arguments in the order of the result's dims)."""
     return (np.sinc(detector_width_x / focal_length * fx)
             * np.sinc(detector_width_y / focal_length * fy))
@@ -114,7 +114,7 @@ def aggregated_detector(
 def _aggregated_detector_kernel(pixel_pitch_x, fx, focal_length, pixel_pitch_y, fy,
                                 detector_width_x, detector_width_y, aggregation):
     """Aggregated pixel OTF on plain arrays (arguments in the order of the result's dims)."""
-    pixel = _detector_kernel(detector_width_x, focal_length, fx, detector_width_y, fy)
+    pixel = detector_kernel(detector_width_x, focal_length, fx, detector_width_y, fy)
     return (_aggregation_factor(fx, pixel_pitch_x, focal_length, aggregation)
             * _aggregation_factor(fy, pixel_pitch_y, focal_length, aggregation)
             * pixel)

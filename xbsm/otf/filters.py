@@ -66,7 +66,7 @@ def _as_kernel(kernel) -> np.ndarray:
     return arr
 
 
-def _pybsm_filter_kernel(u, v, kernel, ifov):
+def pybsm_filter_kernel(u, v, kernel, ifov):
     """Look up pyBSM 0.16.1's table of |FFT2(kernel)|, quirks included."""
     n = PYBSM_FFT_SIZE
     table = np.abs(sp_fft.fftshift(sp_fft.fft2(kernel, [n, n])))
@@ -134,15 +134,15 @@ def sharpening_filter(fx, fy, kernel, ifov_x, ifov_y=None, method="dtft"):
     if method == "pybsm":
         if isinstance(ifov_x, xr.DataArray):
             raise ValueError("ifov_x must be a float for method='pybsm'")
-        out = apply_kernel(_pybsm_filter_kernel, fx, fy, kernel=k, ifov=float(ifov_x))
+        out = apply_kernel(pybsm_filter_kernel, fx, fy, kernel=k, ifov=float(ifov_x))
         return described(out, sharpening_filter)
     if ifov_y is None:
         ifov_y = ifov_x
-    out = apply_kernel(_dtft_filter_kernel, fy, ifov_y, fx, ifov_x, kernel=k, dtype=complex)
+    out = apply_kernel(dtft_filter_kernel, fy, ifov_y, fx, ifov_x, kernel=k, dtype=complex)
     return described(out, sharpening_filter)
 
 
-def _dtft_filter_kernel(fy, ifov_y, fx, ifov_x, kernel):
+def dtft_filter_kernel(fy, ifov_y, fx, ifov_x, kernel):
     """Discrete-space Fourier transform of ``kernel`` on plain arrays (paper Sec. 2.4).
 
     Arguments in the order of the result's dims; ``kernel`` rows run along y.

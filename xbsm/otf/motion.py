@@ -35,11 +35,11 @@ def jitter(fx, fy, jitter_rms_x, jitter_rms_y):
     """
     _nonnegative("jitter_rms_x", jitter_rms_x)
     _nonnegative("jitter_rms_y", jitter_rms_y)
-    out = apply_kernel(_jitter_kernel, jitter_rms_x, fx, jitter_rms_y, fy)
+    out = apply_kernel(jitter_kernel, jitter_rms_x, fx, jitter_rms_y, fy)
     return described(out, jitter)
 
 
-def _jitter_kernel(jitter_rms_x, fx, jitter_rms_y, fy):
+def jitter_kernel(jitter_rms_x, fx, jitter_rms_y, fy):
     """IBSM Eq. 3-28 on plain arrays (arguments in the order of the result's dims)."""
     return np.exp(-2.0 * np.pi**2 * (jitter_rms_x**2 * fx**2 + jitter_rms_y**2 * fy**2))
 
@@ -69,11 +69,11 @@ def drift(fx, fy, drift_x, drift_y):
     """
     _finite("drift_x", drift_x)
     _finite("drift_y", drift_y)
-    out = apply_kernel(_drift_kernel, drift_x, fx, drift_y, fy)
+    out = apply_kernel(drift_kernel, drift_x, fx, drift_y, fy)
     return described(out, drift)
 
 
-def _drift_kernel(drift_x, fx, drift_y, fy):
+def drift_kernel(drift_x, fx, drift_y, fy):
     """IBSM Eq. 3-29 on plain arrays (arguments in the order of the result's dims)."""
     return np.sinc(drift_x * fx) * np.sinc(drift_y * fy)
 

@@ -16,7 +16,7 @@ from .._metadata import described
 __all__ = ["spectral_average"]
 
 
-def _is_lazy(value) -> bool:
+def is_lazy(value) -> bool:
     """Tell whether ``value`` is dask-backed (checking it would compute it)."""
     data = getattr(value, "data", value)
     return type(data).__module__.startswith("dask")
@@ -29,7 +29,7 @@ def _require(name: str, value, condition, allowed: str) -> None:
     fails every condition. Dask-backed values are not checked, so that
     validation never triggers a computation.
     """
-    if value is None or _is_lazy(value):
+    if value is None or is_lazy(value):
         return
     arr = np.asarray(getattr(value, "values", value))
     with np.errstate(invalid="ignore"):
@@ -67,7 +67,7 @@ def _spectral(func, *args, spectral: int = 2, dtype=float, **knobs):
     return apply_kernel(func, *args, core=core, dtype=dtype, **knobs)
 
 
-def _weighted_sum_kernel(otf, weights):
+def weighted_sum_kernel(otf, weights):
     """Sum over the last (wavelength) axis of ``otf`` times the normalised ``weights``."""
     normalised = weights / np.nansum(weights, axis=-1, keepdims=True)
     return np.einsum("...k,...k->...", otf, normalised)
@@ -109,6 +109,6 @@ def spectral_average(otf, weights, dim: str = "wavelength"):
         raise ValueError(f"otf must have dimension {dim!r}; it has {otf.dims}")
     _nonnegative("weights", weights)
     _require("weights", weights.sum(dim), lambda a: a > 0, f"not all zero along {dim!r}")
-    out = apply_kernel(_weighted_sum_kernel, otf, weights, core=[[dim], [dim]],
+    out = apply_kernel(weighted_sum_kernel, otf, weights, core=[[dim], [dim]],
                        dtype=np.result_type(otf.dtype, weights.dtype))
     return described(out, spectral_average)

@@ -21,8 +21,8 @@ from .._kernels import apply_kernel, dataset
 from .._metadata import named
 from ..methods import Method
 from . import aperture, filters, motion, turbulence, wavefront
-from .detector import _detector_kernel
-from .motion import _jitter_kernel
+from .detector import detector_kernel
+from .motion import jitter_kernel
 from .spectral import _spectral
 
 ORIENTATION = xr.DataArray(["x", "y"], dims="orientation", name="orientation")
@@ -134,9 +134,9 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
         "aperture": _spectral(_aperture_band_kernel, radial, s["aperture_diameter"],
                               s["obscuration_ratio"], wl, w),
         "turbulence": None,
-        "detector": apply_kernel(_detector_kernel, s["detector_width_x"], s["focal_length"], fx,
+        "detector": apply_kernel(detector_kernel, s["detector_width_x"], s["focal_length"], fx,
                               s["detector_width_y"], fy_),
-        "jitter": apply_kernel(_jitter_kernel, s["jitter_x"], fx, s["jitter_y"], fy_),
+        "jitter": apply_kernel(jitter_kernel, s["jitter_x"], fx, s["jitter_y"], fy_),
         "drift": apply_kernel(_exposure_drift_kernel, s["drift_rate_x"], integration_time,
                            s["tdi_stages"], fx, s["drift_rate_y"], fy_),
         "wavefront": _spectral(_wavefront_band_kernel, s["wavefront_variance"],
@@ -172,7 +172,7 @@ def _turbulence(s, sc, radial, wl, w, integration_time, slant_range, method: Met
     cn2 = sc["cn2_at_1m"]
     r0_ref = apply_kernel(_turbulent_path_kernel, sc["high_altitude_wind_speed"], slant_range,
                        sc["altitude"], cn2,
-                       nodes=turbulence._path_nodes(method.turbulence_path_samples,
+                       nodes=turbulence.path_nodes(method.turbulence_path_samples,
                                                     method.turbulence_path_rule),
                        form=method.geometry)
     otf = _spectral(_turbulence_band_kernel, cn2, radial, r0_ref, integration_time,
@@ -188,7 +188,7 @@ def _last(a):
 
 def _aperture_band_kernel(radial, aperture_diameter, obscuration_ratio, wl, w):
     """Aperture OTF weighted over the last (wavelength) axis by normalised ``w`` (numpy)."""
-    mono = aperture._circular_aperture_kernel(_last(np.hypot(radial, 0.0)),
+    mono = aperture.circular_aperture_kernel(_last(np.hypot(radial, 0.0)),
                                               _last(aperture_diameter), wl,
                                               _last(obscuration_ratio))
     return np.einsum("...k,...k->...", mono, w)
@@ -196,7 +196,7 @@ def _aperture_band_kernel(radial, aperture_diameter, obscuration_ratio, wl, w):
 
 def _wavefront_band_kernel(variance, variance_wavelength, fx, length_x, fy, length_y, wl, w):
     """Random-phase wavefront OTF weighted over the last (wavelength) axis (numpy)."""
-    mono = wavefront._random_phase_kernel(_last(variance), _last(variance_wavelength), wl,
+    mono = wavefront.random_phase_kernel(_last(variance), _last(variance_wavelength), wl,
                                           _last(fx), _last(length_x), _last(fy), _last(length_y))
     return np.einsum("...k,...k->...", mono, w)
 
@@ -204,20 +204,20 @@ def _wavefront_band_kernel(variance, variance_wavelength, fx, length_x, fy, leng
 def _exposure_drift_kernel(drift_rate_x, integration_time, tdi_stages, fx, drift_rate_y, fy):
     """Drift OTF over the exposure of all TDI stages (numpy)."""
     exposure = integration_time * tdi_stages
-    return motion._drift_kernel(drift_rate_x * exposure, fx, drift_rate_y * exposure, fy)
+    return motion.drift_kernel(drift_rate_x * exposure, fx, drift_rate_y * exposure, fy)
 
 
 def _turbulent_path_kernel(wind_speed, slant_range, altitude, cn2, *, nodes, form):
     """Path r0 at 1 um of a target on the ground; a stand-in Cn2 where there is none (numpy)."""
     cn2 = np.where(cn2 > 0, cn2, 1.0e-14)
-    return turbulence._slant_path_kernel(turbulence.REFERENCE_WAVELENGTH, wind_speed,
+    return turbulence.slant_path_kernel(turbulence.REFERENCE_WAVELENGTH, wind_speed,
                                          slant_range, altitude, 0.0, cn2, nodes=nodes, form=form)
 
 
 def _turbulence_band_kernel(cn2, radial, r0_ref, integration_time, tdi_stages, speed, diameter,
                             wl, w):
     """Wind-blended turbulence OTF weighted over wavelength; 1 where cn2 = 0 (numpy)."""
-    otf = turbulence._polychromatic_kernel(
+    otf = turbulence.polychromatic_kernel(
         np.hypot(radial, 0.0), r0_ref, integration_time * tdi_stages, speed, diameter,
         turbulence.REFERENCE_WAVELENGTH, wl, w)
     return np.where(cn2 > 0, otf, 1.0)
@@ -225,7 +225,7 @@ def _turbulence_band_kernel(cn2, radial, r0_ref, integration_time, tdi_stages, s
 
 def _band_r0_kernel(cn2, r0_ref, wl, w):
     """Band-weighted r0; infinite where cn2 = 0 (numpy)."""
-    r0 = turbulence._band_kernel(r0_ref, turbulence.REFERENCE_WAVELENGTH, wl, w)
+    r0 = turbulence.band_kernel(r0_ref, turbulence.REFERENCE_WAVELENGTH, wl, w)
     return np.where(cn2 > 0, r0, np.inf)
 
 
@@ -244,7 +244,7 @@ def _ones_kernel(fx, fy):
 
 def _sampled_filter_kernel(fy, pixel_pitch_y, focal_length, fx, pixel_pitch_x, *, kernel):
     """The sharpening filter at the detector's sample spacing (numpy)."""
-    return filters._dtft_filter_kernel(fy, pixel_pitch_y / focal_length, fx,
+    return filters.dtft_filter_kernel(fy, pixel_pitch_y / focal_length, fx,
                                        pixel_pitch_x / focal_length, kernel=kernel)
 
 
@@ -272,7 +272,7 @@ def _filter(sensor, fx, fy, method: Method):
                 "method filter_otf='pybsm' cannot sweep pixel_pitch_x or focal_length "
                 "with a filter kernel; use filter_otf='dtft'"
             )
-        return apply_kernel(filters._pybsm_filter_kernel, fx, fy, kernel=k,
+        return apply_kernel(filters.pybsm_filter_kernel, fx, fy, kernel=k,
                          ifov=float(pitch_x) / float(focal))
     return apply_kernel(_sampled_filter_kernel, fy, pitch_y, focal, fx, pitch_x, kernel=k,
                      dtype=complex)
@@ -300,7 +300,7 @@ def _filter_arrays(p, fx, fy, method: Method):
     if rule is None:
         return np.ones(fx.shape)
     if rule == "pybsm":
-        return filters._pybsm_filter_kernel(fx, fy, kernel=kernel,
+        return filters.pybsm_filter_kernel(fx, fy, kernel=kernel,
                                             ifov=p["pixel_pitch_x"] / p["focal_length"])
     return _sampled_filter_kernel(fy, p["pixel_pitch_y"], p["focal_length"], fx,
                                   p["pixel_pitch_x"], kernel=kernel)
@@ -319,7 +319,7 @@ def system_slice_arrays(p, nodes, wavelength, spectral_weights, integration_time
     cn2 = p["cn2_at_1m"]
     r0_ref = _turbulent_path_kernel(
         p["high_altitude_wind_speed"], slant_range, p["altitude"], cn2,
-        nodes=turbulence._path_nodes(method.turbulence_path_samples,
+        nodes=turbulence.path_nodes(method.turbulence_path_samples,
                                      method.turbulence_path_rule),
         form=method.geometry)
     radial = [
@@ -327,9 +327,9 @@ def system_slice_arrays(p, nodes, wavelength, spectral_weights, integration_time
         _turbulence_band_kernel(cn2, nodes, r0_ref, integration_time, p["tdi_stages"],
                                 p["platform_speed"], p["aperture_diameter"], wl, w)]
     sliced = [
-        _detector_kernel(p["detector_width_x"], p["focal_length"], fx, p["detector_width_y"],
+        detector_kernel(p["detector_width_x"], p["focal_length"], fx, p["detector_width_y"],
                          fy),
-        _jitter_kernel(p["jitter_x"], fx, p["jitter_y"], fy),
+        jitter_kernel(p["jitter_x"], fx, p["jitter_y"], fy),
         _exposure_drift_kernel(p["drift_rate_x"], integration_time, p["tdi_stages"], fx,
                                p["drift_rate_y"], fy),
         _wavefront_band_kernel(p["wavefront_variance"], p["wavefront_wavelength"], fx,

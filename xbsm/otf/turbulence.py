@@ -10,13 +10,13 @@ import xarray as xr
 from .._kernels import apply_kernel
 from .._metadata import described
 from ..geometry import altitude_along_path
-from ..quadrature import _legendre
+from ..quadrature import legendre_nodes
 from .spectral import (
     _nonnegative,
     _positive,
     _require,
     _spectral,
-    _weighted_sum_kernel,
+    weighted_sum_kernel,
 )
 
 __all__ = [
@@ -126,7 +126,7 @@ def path_coherence_diameter(cn2, wavelength=REFERENCE_WAVELENGTH, path_dim="path
 
 
 @functools.lru_cache(maxsize=16)
-def _path_nodes(path_samples, rule):
+def path_nodes(path_samples, rule):
     """Nodes t in [0, 1] and weights of the normalised path integral (read-only, cached)."""
     if rule == "trapezoid":
         t = np.linspace(0.0, 1.0, path_samples)
@@ -135,7 +135,7 @@ def _path_nodes(path_samples, rule):
     else:
         # Gauss-Legendre in u with z = L u^2: the substitution makes the
         # (z/L)^(5/3) weight and the near-target boundary layer smooth in u.
-        x, w = _legendre(path_samples)
+        x, w = legendre_nodes(path_samples)
         u = 0.5 * (x + 1.0)
         t, w = u**2, w * u  # dz/L = 2u du, du = dx/2
     for a in (t, w):
@@ -204,15 +204,15 @@ def slant_path_coherence_diameter(
     _positive("slant_range", slant_range)
     _positive("cn2_at_1m", cn2_at_1m)
     _positive("wavelength", wavelength)
-    out = apply_kernel(_slant_path_kernel, wavelength, high_altitude_wind_speed, slant_range,
+    out = apply_kernel(slant_path_kernel, wavelength, high_altitude_wind_speed, slant_range,
                     sensor_altitude, target_altitude, cn2_at_1m,
-                    nodes=_path_nodes(int(path_samples), rule), form=geometry_form)
+                    nodes=path_nodes(int(path_samples), rule), form=geometry_form)
     return described(out, slant_path_coherence_diameter, units="m")
 
 
-def _slant_path_kernel(wavelength, high_altitude_wind_speed, slant_range, sensor_altitude,
+def slant_path_kernel(wavelength, high_altitude_wind_speed, slant_range, sensor_altitude,
                        target_altitude, cn2_at_1m, *, nodes, form):
-    """Slant-path r0 on plain arrays; ``nodes`` = (t, weights) of :func:`_path_nodes`.
+    """Slant-path r0 on plain arrays; ``nodes`` = (t, weights) of :func:`path_nodes`.
 
     Arguments in the order of the result's dims. The path runs along a new first axis.
     """
@@ -304,15 +304,15 @@ def band_coherence_diameter(
     _nonnegative("weights", weights)
     _require("weights", weights.sum("wavelength"), lambda a: a > 0,
              "not all zero along 'wavelength'")
-    out = _spectral(_band_kernel, coherence_diameter, reference_wavelength, wavelength, weights)
+    out = _spectral(band_kernel, coherence_diameter, reference_wavelength, wavelength, weights)
     return described(out, band_coherence_diameter, units="m")
 
 
-def _band_kernel(coherence_diameter, reference_wavelength, wavelength, weights):
+def band_kernel(coherence_diameter, reference_wavelength, wavelength, weights):
     """Weighted mean of r0(lambda) over the last (wavelength) axis, on plain arrays."""
     r0 = _scale_kernel(coherence_diameter[..., None], wavelength,
                        np.asarray(reference_wavelength)[..., None])
-    return _weighted_sum_kernel(r0, weights)
+    return weighted_sum_kernel(r0, weights)
 
 
 def turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, exposure_coefficient=0.0):
@@ -502,12 +502,12 @@ def polychromatic_turbulence(
 
 
 def _polychromatic_xy_kernel(fx, fy, r0_ref, exposure, speed, diameter, reference, wl, w):
-    """:func:`_polychromatic_kernel` at hypot(fx, fy) (arguments in the order of the dims)."""
-    return _polychromatic_kernel(np.hypot(fx, fy), r0_ref, exposure, speed, diameter, reference,
+    """:func:`polychromatic_kernel` at hypot(fx, fy) (arguments in the order of the dims)."""
+    return polychromatic_kernel(np.hypot(fx, fy), r0_ref, exposure, speed, diameter, reference,
                                  wl, w)
 
 
-def _polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, wl, w):
+def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, wl, w):
     """Weighted sum over the last (wavelength) axis (numpy).
 
     ``w`` is normalised here. The OTFs are evaluated a block at a time, at most about

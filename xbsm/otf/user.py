@@ -6,7 +6,7 @@ import numpy as np
 import xarray as xr
 
 from .._metadata import described
-from .spectral import _is_lazy
+from .spectral import is_lazy
 
 __all__ = ["user_defined", "OUTSIDE_RULES"]
 
@@ -25,7 +25,7 @@ def _check_axis(table, dim):
 
 
 def _check_outside(name, value, low, high):
-    if _is_lazy(value):
+    if is_lazy(value):
         value = value.compute()
     arr = np.asarray(value)
     if arr.size and (np.nanmin(arr) < low or np.nanmax(arr) > high):

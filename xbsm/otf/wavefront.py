@@ -60,12 +60,12 @@ def random_phase_wavefront(
     _positive("phase_variance_wavelength", phase_variance_wavelength)
     # the variance at its own wavelength: (lambda / lambda)^2 = 1 exactly
     reference = wavelength if phase_variance_wavelength is None else phase_variance_wavelength
-    out = apply_kernel(_random_phase_kernel, phase_variance, reference, wavelength, fx,
+    out = apply_kernel(random_phase_kernel, phase_variance, reference, wavelength, fx,
                     correlation_length_x, fy, correlation_length_y)
     return described(out, random_phase_wavefront)
 
 
-def _random_phase_kernel(phase_variance, phase_variance_wavelength, wavelength, fx,
+def random_phase_kernel(phase_variance, phase_variance_wavelength, wavelength, fx,
                          correlation_length_x, fy, correlation_length_y):
     """IBSM Eq. 3-31 on plain arrays (arguments in the order of the result's dims)."""
     variance = phase_variance * (phase_variance_wavelength / wavelength) ** 2

@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from ._layout import _hue_colors
-from ._style import _axis_label, _quantity, _units, _value_label, _words
+from ._layout import hue_colors
+from ._style import axis_label, units_of, value_label, with_unit, words
 
 NOTE_WIDTH = 60
 """Characters per line of the legend's note on cells that never meet the requirement."""
@@ -47,7 +47,7 @@ class _Seen:
     never: list = field(default_factory=list)
 
 
-def _answer(goal, x, hue) -> _Answer:
+def goal_answer(goal, x, hue) -> _Answer:
     """The answer of ``goal`` without its length-1 dimensions, checked and labelled."""
     if not isinstance(goal, xr.Dataset) or "goal_flags" not in goal:
         raise ValueError("goal must be the Dataset of xbsm.study.max_range or min_parameter "
@@ -63,11 +63,11 @@ def _answer(goal, x, hue) -> _Answer:
     bits = bits.squeeze([d for d in bits.dims if d not in answer.dims])
     bits = bits.broadcast_like(answer).transpose(*answer.dims)
     title, asked = _requirement(goal, answer)
-    units = _units(answer)
+    units = units_of(answer)
     if answer.name == "max_range" and units == "m":
         factor, ylabel = 1e3, f"{asked} [km]"  # ranges in km, whatever their size
     else:
-        factor, ylabel = _axis_label(asked, units, answer.values)
+        factor, ylabel = axis_label(asked, units, answer.values)
     arrow = 1 if answer.name == "max_range" else -1
     return _Answer(answer / factor, bits, x, hue, title, ylabel, arrow)
 
@@ -90,7 +90,7 @@ def _x_and_hue(dims: list, x, hue) -> tuple[str, str | None]:
 
 def _requirement(goal: xr.Dataset, answer: xr.DataArray) -> tuple[str, str]:
     """Title (the question with its threshold) and y axis name of a range-performance plot."""
-    name = _words(str(answer.attrs.get("long_name", answer.name)))
+    name = words(str(answer.attrs.get("long_name", answer.name)))
     asked = name.replace(" meeting the requirement", "")
     giqe = goal.coords.get("giqe")
     quantity = f"NIIRS (GIQE {int(giqe)})" if giqe is not None and giqe.size == 1 else (
@@ -100,16 +100,16 @@ def _requirement(goal: xr.Dataset, answer: xr.DataArray) -> tuple[str, str]:
         title = f"{asked} with {quantity} \u2265 {float(threshold):g}"
     except ValueError:
         title = f"{asked} for each requirement" if threshold == "array" else name
-    fixed = [_value_label(goal, d, 0) for d in goal.dims if goal.sizes[d] == 1]
+    fixed = [value_label(goal, d, 0) for d in goal.dims if goal.sizes[d] == 1]
     return title[:1].upper() + title[1:] + "".join(f", {f}" for f in fixed), asked
 
 
-def _draw_goal_lines(ax, answer: _Answer, xs: np.ndarray, flag_bits) -> _Seen:
+def draw_goal_lines(ax, answer: _Answer, xs: np.ndarray, flag_bits) -> _Seen:
     """One line per hue value; returns what was drawn and where the requirement is never met."""
     seen = _Seen()
     hue = answer.hue
     hues = range(answer.da.sizes[hue]) if hue is not None else [None]
-    for k, color in zip(hues, _hue_colors(answer.da, hue)[0], strict=True):
+    for k, color in zip(hues, hue_colors(answer.da, hue)[0], strict=True):
         pick = {hue: k} if k is not None else {}
         y, bits = answer.da.isel(pick).values, answer.bits.isel(pick).values
         finite = np.isfinite(y)
@@ -123,7 +123,7 @@ def _draw_goal_lines(ax, answer: _Answer, xs: np.ndarray, flag_bits) -> _Seen:
         if missing.any():
             where = ", ".join(_x_text(answer.da, answer.x, i)
                               for i in np.flatnonzero(missing))
-            seen.never.append(f"{_value_label(answer.da, hue, k)} at {where}"
+            seen.never.append(f"{value_label(answer.da, hue, k)} at {where}"
                               if k is not None else where)
     return seen
 
@@ -149,18 +149,18 @@ def _x_text(da: xr.DataArray, dim: str, index: int) -> str:
         return f"#{index}"
     coord = da[dim]
     if coord.dtype.kind in "iuf":
-        return _quantity(coord.values[index], _units(coord), coord.values)
+        return with_unit(coord.values[index], units_of(coord), coord.values)
     return str(coord.values[index])
 
 
-def _goal_legend(ax, answer: _Answer, seen: _Seen) -> None:
+def goal_legend(ax, answer: _Answer, seen: _Seen) -> None:
     """Legend: a line per hue value, the kinds of point drawn, the cells that never meet."""
     from matplotlib.lines import Line2D
 
     handles = []
     if answer.hue is not None:
-        colors = _hue_colors(answer.da, answer.hue)[0]
-        handles += [Line2D([], [], color=c, lw=2, label=_value_label(answer.da,
+        colors = hue_colors(answer.da, answer.hue)[0]
+        handles += [Line2D([], [], color=c, lw=2, label=value_label(answer.da,
                                                                      answer.hue, k))
                     for k, c in enumerate(colors)]
     edge = ("lower bound \u2191: still met at the longest range swept" if answer.arrow > 0
@@ -180,7 +180,7 @@ def _goal_legend(ax, answer: _Answer, seen: _Seen) -> None:
     ax.legend(handles=handles, fontsize="small")
 
 
-def _finish_goal_axes(ax, answer: _Answer, xs: np.ndarray, xlabel: str) -> None:
+def finish_goal_axes(ax, answer: _Answer, xs: np.ndarray, xlabel: str) -> None:
     """Labels, title, the whole swept x range, a y axis from zero with room for the arrows."""
     ax.set_xlabel(xlabel)
     ax.set_ylabel(answer.ylabel)

@@ -1,8 +1,8 @@
 """A quantity against a swept dimension: faceting, one flagged line per value, legends.
 
-:func:`_layout` places every dimension of a variable (x axis, line colour,
+:func:`layout_of` places every dimension of a variable (x axis, line colour,
 panel column, panel row); :func:`_draw_series` draws one line with its
-validity flags; :func:`_against` makes the whole faceted figure (Figures 2
+validity flags; :func:`plot_against` makes the whole faceted figure (Figures 2
 and 3 of the paper).
 """
 
@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from ._style import _COLORS, MAX_PANELS, _axis_label, _suptitle, _units, _value_label, _words
+from ._style import COLORS, MAX_PANELS, axis_label, set_suptitle, units_of, value_label, words
 
 # ---- faceting -------------------------------------------------------------------------------
 
@@ -27,7 +27,7 @@ class _Layout:
     row: str | None
 
 
-def _layout(da: xr.DataArray) -> _Layout | None:
+def layout_of(da: xr.DataArray) -> _Layout | None:
     """Place every dimension of ``da`` (size-1 ones aside); None if nothing varies.
 
     The x axis is ``ground_range`` (else the first dimension); the lines are
@@ -91,7 +91,7 @@ def _panels(layout: _Layout, sizes):
 
 # ---- one line with its flags ----------------------------------------------------------------
 
-def _run_starts(mask: np.ndarray) -> np.ndarray:
+def run_starts(mask: np.ndarray) -> np.ndarray:
     """True at the first element of every run of True."""
     return mask & ~np.concatenate([[False], mask[:-1]])
 
@@ -120,7 +120,7 @@ def _draw_series(ax, x, y, invalid, outside, color, bounds) -> set:
             if mask.any()}
     for name, mask, level, marker in (("below", below, lo, "v"), ("above", above, hi, "^"),
                                       ("invalid", ~valid, lo, "x")):
-        starts = _run_starts(mask)
+        starts = run_starts(mask)
         if starts.any():
             ax.plot(x[starts], np.full(starts.sum(), level), marker, color=color, ms=7,
                     clip_on=False, zorder=5)
@@ -128,7 +128,7 @@ def _draw_series(ax, x, y, invalid, outside, color, bounds) -> set:
     return used
 
 
-def _mark_handles(used: set, bounds, quantity: str, calibrated: bool) -> list:
+def mark_handles(used: set, bounds, quantity: str, calibrated: bool) -> list:
     """Legend entries explaining the line styles and markers actually used."""
     from matplotlib.lines import Line2D
 
@@ -151,7 +151,7 @@ def _mark_handles(used: set, bounds, quantity: str, calibrated: bool) -> list:
 # ---- Figures 2 and 3: a quantity against range ----------------------------------------------
 
 @dataclass(frozen=True)
-class _Curves:
+class Curves:
     """A quantity to draw against its first dimension, with its flags and axis settings."""
 
     values: xr.DataArray
@@ -163,37 +163,37 @@ class _Curves:
     calibrated: bool
 
 
-def _hue_colors(da: xr.DataArray, hue: str | None):
+def hue_colors(da: xr.DataArray, hue: str | None):
     """Line colours, and (values, label) for a colour bar when there are too many for a legend."""
     n = da.sizes[hue] if hue else 1
-    if n <= len(_COLORS):
-        return _COLORS[:n], None
+    if n <= len(COLORS):
+        return COLORS[:n], None
     from matplotlib import colormaps
 
-    values, label = _x_values(da, hue)
+    values, label = x_values(da, hue)
     low, span = values.min(), np.ptp(values) or 1.0
     return [colormaps["viridis"]((v - low) / span) for v in values], (values, label)
 
 
-def _x_values(da: xr.DataArray, dim: str) -> tuple[np.ndarray, str]:
+def x_values(da: xr.DataArray, dim: str) -> tuple[np.ndarray, str]:
     """Values and axis label of the x dimension (a paired sweep by its first parameter)."""
     if dim not in da.coords or da[dim].dtype.kind not in "iuf":
-        return np.arange(da.sizes[dim], dtype=float), _words(dim)
+        return np.arange(da.sizes[dim], dtype=float), words(dim)
     coord = da[dim]
     paired = [name for name in da.coords if name != dim and da[name].dims == (dim,)]
     if coord.attrs.get("long_name") == "case number" and paired:
         coord = da[paired[0]]
-    factor, label = _axis_label(str(coord.name), _units(coord), coord.values)
+    factor, label = axis_label(str(coord.name), units_of(coord), coord.values)
     return np.asarray(coord.values, dtype=float) / factor, label
 
 
-def _against(curves: _Curves, layout: _Layout, title: str):
+def plot_against(curves: Curves, layout: _Layout, title: str):
     """One figure: a panel per facet, a line per hue value, flags drawn."""
     da = curves.values
     fig, axes = _grid(layout, da.sizes)
-    x, xlabel = _x_values(da, layout.x)
+    x, xlabel = x_values(da, layout.x)
     hues = list(range(da.sizes[layout.hue])) if layout.hue else [None]
-    colors, bar = _hue_colors(da, layout.hue)
+    colors, bar = hue_colors(da, layout.hue)
     used = set()
     for i, j, selector in _panels(layout, da.sizes):
         ax = axes[i, j]
@@ -201,11 +201,11 @@ def _against(curves: _Curves, layout: _Layout, title: str):
             pick = {**selector, **({layout.hue: k} if k is not None else {})}
             used |= _draw_series(ax, x, da.isel(pick).values, curves.invalid.isel(pick).values,
                                  curves.outside.isel(pick).values, color, curves.bounds)
-        ax.set_title("; ".join(_value_label(da, d, k) for d, k in selector.items()),
+        ax.set_title("; ".join(value_label(da, d, k) for d, k in selector.items()),
                      fontsize="medium")
         ax.grid(True, alpha=0.3)
     _finish_axes(axes, curves, xlabel, x)
-    marks = _mark_handles(used, curves.bounds, curves.ylabel.split(" (")[0], curves.calibrated)
+    marks = mark_handles(used, curves.bounds, curves.ylabel.split(" (")[0], curves.calibrated)
     _legend(fig, da, layout, *((hues, colors) if bar is None else ([], [])), marks)
     if bar is not None:
         from matplotlib.cm import ScalarMappable
@@ -214,11 +214,11 @@ def _against(curves: _Curves, layout: _Layout, title: str):
         values, label = bar
         fig.colorbar(ScalarMappable(Normalize(values.min(), values.max()), "viridis"),
                      ax=axes, label=label)
-    _suptitle(fig, title)
+    set_suptitle(fig, title)
     return fig
 
 
-def _finish_axes(axes, curves: _Curves, xlabel: str, x) -> None:
+def _finish_axes(axes, curves: Curves, xlabel: str, x) -> None:
     """Axis labels, scales and limits shared by every panel."""
     ax = axes[0, 0]
     if curves.log:
@@ -244,7 +244,7 @@ def _finish_axes(axes, curves: _Curves, xlabel: str, x) -> None:
 def _legend(fig, da, layout: _Layout, hues, colors, marks: list) -> None:
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], color=c, lw=2, label=_value_label(da, layout.hue, k))
+    handles = [Line2D([], [], color=c, lw=2, label=value_label(da, layout.hue, k))
                for k, c in zip(hues, colors, strict=True) if k is not None]
     handles += marks
     if handles:

@@ -1,8 +1,8 @@
 """One scenario of a result: its selection, the noise bars and the MTF curves.
 
-:func:`_point` picks the scenario nearest to the paper's (20 km ground range,
+:func:`nearest_point` picks the scenario nearest to the paper's (20 km ground range,
 5 km visibility for the noise; 23 km visibility for the MTF);
-:func:`_noise_panel` and :func:`_mtf_panel` draw it on one Axes.
+:func:`noise_panel` and :func:`mtf_panel` draw it on one Axes.
 """
 
 from __future__ import annotations
@@ -14,14 +14,14 @@ import xarray as xr
 
 from .. import flags
 from ..noise import SELF_EMISSION_SOURCES
-from ._style import _COLORS, MTF_COMPONENTS, NOISE_TERMS, _quantity, _units, _value_label, _words
+from ._style import COLORS, MTF_COMPONENTS, NOISE_TERMS, units_of, value_label, with_unit, words
 
 # ---- choosing one scenario -----------------------------------------------------------------
 
 _OWN_DIMS = ("giqe", "frequency", "orientation")
 
 
-def _point(ds: xr.Dataset, targets, keep=()) -> tuple[dict, list]:
+def nearest_point(ds: xr.Dataset, targets, keep=()) -> tuple[dict, list]:
     """One scenario: the nearest value to each target, the first of any other dimension.
 
     Returns the ``isel`` selector and a description of each choice for the title.
@@ -34,13 +34,13 @@ def _point(ds: xr.Dataset, targets, keep=()) -> tuple[dict, list]:
         target = targets.get(dim)
         if coord is not None and target is not None and coord.dtype.kind in "iuf":
             index = int(np.nanargmin(np.abs(coord.values - target)))
-            text = _quantity(coord.values[index], _units(coord), coord.values) + f" {_words(dim)}"
+            text = with_unit(coord.values[index], units_of(coord), coord.values) + f" {words(dim)}"
             if coord.values[index] != target:
-                text += f" (nearest to {_quantity(target, _units(coord), coord.values)})"
+                text += f" (nearest to {with_unit(target, units_of(coord), coord.values)})"
         else:
             values = list(coord.values) if coord is not None else []
             index = values.index(target) if target in values else 0
-            text = _value_label(ds, dim, index)
+            text = value_label(ds, dim, index)
             if ds.sizes[dim] > 1 and target not in values:
                 text += f" (first of {ds.sizes[dim]})"
         selector[dim] = index
@@ -48,25 +48,25 @@ def _point(ds: xr.Dataset, targets, keep=()) -> tuple[dict, list]:
     return selector, described
 
 
-def _at(ds: xr.Dataset, name: str, selector: dict) -> xr.DataArray:
+def select_at(ds: xr.Dataset, name: str, selector: dict) -> xr.DataArray:
     da = ds[name]
     return da.isel({d: i for d, i in selector.items() if d in da.dims})
 
 
 # ---- the noise bars --------------------------------------------------------------------------
 
-def _noise_panel(ax, ds: xr.Dataset, selector: dict) -> None:
+def noise_panel(ax, ds: xr.Dataset, selector: dict) -> None:
     """Bars of the noise terms of one scenario, with its signal, contrast, well fill and SNR."""
     names = [name for name in NOISE_TERMS if name in ds and (
         name != "other_noise" or bool((ds[name] != 0).any()))]
     split = [name for name in SELF_EMISSION_SOURCES if name in names]
-    contributing = [name for name in split if float(_at(ds, name, selector)) > 0]
+    contributing = [name for name in split if float(select_at(ds, name, selector)) > 0]
     if contributing:  # one bar per source that contributes instead of their sum
         names = [n for n in names if n != "self_emission_noise" and (
             n not in split or n in contributing)]
     else:
         names = [n for n in names if n not in split]
-    values = np.array([float(_at(ds, name, selector)) for name in names])
+    values = np.array([float(select_at(ds, name, selector)) for name in names])
     ax.set_xticks(range(len(names)), [NOISE_TERMS[n] for n in names], rotation=40, ha="right")
     ax.set_ylabel("noise [rms electrons]")
     if not np.isfinite(values).any():
@@ -84,8 +84,9 @@ def _noise_panel(ax, ds: xr.Dataset, selector: dict) -> None:
         ("well_fill", "well fill", "{:.0%}"), ("snr", "contrast SNR", "{:.3g}"),
         ("effective_integration_time", "integration time", "{:.3g} ms")) if name in ds]
     scale = {"effective_integration_time": 1e3}
-    text = "\n".join(f"{label}: {fmt.format(scale.get(name, 1) * float(_at(ds, name, selector)))}"
-                     for name, label, fmt in facts)
+    text = "\n".join(
+        f"{label}: {fmt.format(scale.get(name, 1) * float(select_at(ds, name, selector)))}"
+        for name, label, fmt in facts)
     ax.text(0.98, 0.97, text, transform=ax.transAxes, ha="right", va="top", fontsize="small",
             bbox={"boxstyle": "round", "facecolor": "white", "edgecolor": "0.7"})
 
@@ -96,7 +97,7 @@ def _pixel_angle(ds: xr.Dataset, selector: dict) -> float | None:
     """Angle one pixel subtends at one scenario (GSD over slant range), if known [rad]."""
     if "gsd" not in ds or "slant_range" not in ds:
         return None
-    value = float(_at(ds, "gsd", selector)) / float(_at(ds, "slant_range", selector))
+    value = float(select_at(ds, "gsd", selector)) / float(select_at(ds, "slant_range", selector))
     return value if np.isfinite(value) and value > 0 else None
 
 
@@ -105,7 +106,7 @@ def _mtf_curves(ds: xr.Dataset, selector: dict) -> dict:
     names = [n for n in (*MTF_COMPONENTS, "system", "system_unfiltered") if f"mtf_{n}" in ds]
     curves = {}
     for name in names:
-        line = _at(ds, f"mtf_{name}", selector)
+        line = select_at(ds, f"mtf_{name}", selector)
         if line.dims != ("frequency",):
             raise ValueError(f"mtf_{name} at one scenario still has dims {line.dims}; "
                              "expected ('frequency',)")
@@ -114,7 +115,7 @@ def _mtf_curves(ds: xr.Dataset, selector: dict) -> dict:
 
 
 @dataclass(frozen=True)
-class _FrequencyAxis:
+class FrequencyAxis:
     """The x axis of an MTF panel: values, label, Nyquist, and an optional top axis."""
 
     x: np.ndarray
@@ -123,30 +124,30 @@ class _FrequencyAxis:
     top: tuple | None = None  # (forward, inverse, label) for a secondary x axis
 
 
-def _frequency_axis(ds: xr.Dataset, selector: dict, frequency: np.ndarray) -> _FrequencyAxis:
+def frequency_axis(ds: xr.Dataset, selector: dict, frequency: np.ndarray) -> FrequencyAxis:
     """Cycles per pixel with Nyquist at 0.5 (cycles/mrad on top); cycles/mrad if no pixel."""
     pixel = _pixel_angle(ds, selector)
     if pixel is None:
-        return _FrequencyAxis(frequency * 1e-3, "spatial frequency [cycles/mrad]")
-    return _FrequencyAxis(frequency * pixel, "spatial frequency [cycles/pixel]", 0.5,
+        return FrequencyAxis(frequency * 1e-3, "spatial frequency [cycles/mrad]")
+    return FrequencyAxis(frequency * pixel, "spatial frequency [cycles/pixel]", 0.5,
                           (lambda u: u / pixel * 1e-3, lambda m: m * 1e3 * pixel,
                            "[cycles/mrad]"))
 
 
-def _mtf_panel(ax, ds: xr.Dataset, selector: dict, axis: _FrequencyAxis) -> list:
+def mtf_panel(ax, ds: xr.Dataset, selector: dict, axis: FrequencyAxis) -> list:
     """Component MTFs and the system MTF of one scenario, Nyquist marked.
 
     Returns the components left out because they are identically one.
     """
     x, curves = axis.x, _mtf_curves(ds, selector)
-    bad = "mtf_flags" in ds and bool(flags.is_invalid(_at(ds, "mtf_flags", selector)))
+    bad = "mtf_flags" in ds and bool(flags.is_invalid(select_at(ds, "mtf_flags", selector)))
     if bad or not np.isfinite(curves["system"]).any():
         ax.text(0.5, 0.5, "no valid MTF here\n(invalid flag)", ha="center",
                 transform=ax.transAxes)
     ones = [n for n in MTF_COMPONENTS if n in curves and np.all(np.abs(curves[n] - 1) < 1e-12)]
     for k, name in enumerate(MTF_COMPONENTS):
         if name in curves and name not in ones:
-            ax.plot(x, curves[name], color=_COLORS[k], lw=1.4, label=name)
+            ax.plot(x, curves[name], color=COLORS[k], lw=1.4, label=name)
     if "filter" in curves and "filter" not in ones and "system_unfiltered" in curves:
         ax.plot(x, curves["system_unfiltered"], "k--", lw=1.4, label="system without filter")
     ax.plot(x, curves["system"], "k", lw=2.4, label="system")
@@ -164,7 +165,7 @@ def _mtf_panel(ax, ds: xr.Dataset, selector: dict, axis: _FrequencyAxis) -> list
     return ones
 
 
-def _mtf_handles(axes, ones) -> list:
+def mtf_handles(axes, ones) -> list:
     """Legend entries of every curve drawn in ``axes`` (once each) and of the ones left out."""
     from matplotlib.lines import Line2D
 
@@ -179,7 +180,7 @@ def _mtf_handles(axes, ones) -> list:
     return out
 
 
-def _orientations(ds: xr.Dataset) -> list:
+def orientation_rows(ds: xr.Dataset) -> list:
     """Orientation indices worth a row each: both only if some component differs between them."""
     if "orientation" not in ds.dims or ds.sizes["orientation"] == 1:
         return [None]

@@ -1,8 +1,8 @@
 """Constants, display units, labels and titles shared by every xbsm figure.
 
 Values arrive in SI units; :func:`_scale` picks a readable unit for display
-(m -> km, rad -> mrad), :func:`_value_label` names one value of a swept
-dimension with its unit (legends, panel titles), and :func:`_context` gathers
+(m -> km, rad -> mrad), :func:`value_label` names one value of a swept
+dimension with its unit (legends, panel titles), and :func:`context_of` gathers
 the title lines a result carries (study title, fixed parameters, method).
 """
 
@@ -60,14 +60,14 @@ NOISE_POINT = MappingProxyType({"ground_range": 20e3, "visibility": 5.0})
 MTF_POINT = MappingProxyType({"visibility": 23.0})
 """Visibility of the MTF breakdown (paper Figure 5). [km]"""
 
-_UNIT_TEXT = MappingProxyType({"m s-1": "m/s", "rad s-1": "rad/s", "s-1": "1/s",
+UNIT_TEXT = MappingProxyType({"m s-1": "m/s", "rad s-1": "rad/s", "s-1": "1/s",
                                "m-2/3": "m^-2/3", "W m-2 m-1": "W/(m² m)", "count": "electrons"})
 _SCALES = MappingProxyType({
     "m": ((1e3, "km"), (1.0, "m"), (1e-3, "mm"), (1e-6, "µm"), (1e-9, "nm")),
     "s": ((1.0, "s"), (1e-3, "ms"), (1e-6, "µs")),
     "rad": ((1.0, "rad"), (1e-3, "mrad"), (1e-6, "µrad")),
 })
-_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
+COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
            "tab:pink", "tab:gray", "tab:olive", "tab:cyan")
 _KEY_SENSOR = MappingProxyType({"aperture_diameter": "aperture", "focal_length": "focal length",
                                  "pixel_pitch_x": "pixel pitch"})
@@ -79,7 +79,7 @@ def _scale(values, units: str) -> tuple[float, str]:
     """A display factor and unit for values in ``units`` (m -> km for kilometres, ...)."""
     steps = _SCALES.get(units)
     if not steps:
-        return 1.0, _UNIT_TEXT.get(units, units)
+        return 1.0, UNIT_TEXT.get(units, units)
     finite = np.abs(np.asarray(values, dtype=float))
     finite = finite[np.isfinite(finite) & (finite > 0)]
     largest = finite.max() if finite.size else 1.0
@@ -89,7 +89,7 @@ def _scale(values, units: str) -> tuple[float, str]:
     return steps[-1]
 
 
-def _quantity(value, units: str, like=None) -> str:
+def with_unit(value, units: str, like=None) -> str:
     """``value`` with its unit, e.g. ``"9 km"``, ``"100 m/s"``, ``"0.4"``.
 
     The unit is chosen for ``like`` (all values of a coordinate) if given, else for ``value``.
@@ -99,15 +99,15 @@ def _quantity(value, units: str, like=None) -> str:
     return number if units in ("", "1") else f"{number}\u00a0{text}"  # no line break inside
 
 
-def _words(name: str) -> str:
+def words(name: str) -> str:
     return name.replace("_", " ")
 
 
-def _value_label(ds: xr.Dataset, dim: str, index: int) -> str:
+def value_label(ds: xr.Dataset, dim: str, index: int) -> str:
     """Legend or panel label of one value along ``dim``, with units."""
     coord = ds[dim] if dim in ds.coords else None
     if coord is None:
-        return f"{_words(dim)} #{index}"
+        return f"{words(dim)} #{index}"
     value = coord.values[index]
     if dim == "band":
         edges = [float(ds[name].values[index]) for name in ("wavelength_min", "wavelength_max")
@@ -116,14 +116,14 @@ def _value_label(ds: xr.Dataset, dim: str, index: int) -> str:
         return f"{value} band{span}"
     paired = [name for name in ds.coords if name != dim and ds[name].dims == (dim,)]
     if coord.attrs.get("long_name") == "case number" and paired:
-        return ", ".join(f"{_words(name)} = {_quantity(ds[name].values[index], _units(ds[name]))}"
+        return ", ".join(f"{words(name)} = {with_unit(ds[name].values[index], units_of(ds[name]))}"
                          for name in paired)
     if coord.dtype.kind in "iuf":
-        return f"{_words(dim)} = {_quantity(value, _units(coord), coord.values)}"
-    return f"{_words(dim)} = {value}"
+        return f"{words(dim)} = {with_unit(value, units_of(coord), coord.values)}"
+    return f"{words(dim)} = {value}"
 
 
-def _units(da: xr.DataArray) -> str:
+def units_of(da: xr.DataArray) -> str:
     """The ``units`` attribute, else those of the sensor or scenario parameter of that name."""
     if "units" in da.attrs:
         return str(da.attrs["units"])
@@ -133,33 +133,33 @@ def _units(da: xr.DataArray) -> str:
     return spec.units if spec is not None else "1"
 
 
-def _axis_label(name: str, units: str, values) -> tuple[float, str]:
+def axis_label(name: str, units: str, values) -> tuple[float, str]:
     """Display factor and axis label ``"name [unit]"`` of a coordinate."""
     factor, text = _scale(values, units)
-    return factor, f"{_words(name)} [{text}]" if units not in ("", "1") else _words(name)
+    return factor, f"{words(name)} [{text}]" if units not in ("", "1") else words(name)
 
 
 # ---- the scenario, for titles --------------------------------------------------------------
 
 @dataclass(frozen=True)
-class _Context:
+class Context:
     """What a figure needs beyond the variables: title lines and the MTF frequency grid."""
 
     title: str
     frequency: np.ndarray | None
 
 
-def _context(ds: xr.Dataset) -> _Context:
+def context_of(ds: xr.Dataset) -> Context:
     """Title lines (study title, fixed parameters, method) and the MTF frequencies."""
-    study = _study_of(ds)
+    study = study_of(ds)
     lines = [str(ds.attrs["title"])] if ds.attrs.get("title") else []
     fixed = []
     if study is not None:
         from ..params import SCENARIO_SPECS, SENSOR_SPECS
 
-        fixed += [f"{_words(k)} {_quantity(v, SCENARIO_SPECS[k].units)}"
+        fixed += [f"{words(k)} {with_unit(v, SCENARIO_SPECS[k].units)}"
                   for k, v in study.scenario.items() if np.ndim(v) == 0]
-        fixed += [f"{text} {_quantity(study.sensor[k], SENSOR_SPECS[k].units)}"
+        fixed += [f"{text} {with_unit(study.sensor[k], SENSOR_SPECS[k].units)}"
                   for k, text in _KEY_SENSOR.items() if k in study.sensor and k not in ds.coords]
         if "band" not in ds.dims and {"wavelength_min", "wavelength_max"} <= set(study.sensor):
             fixed.append(f"band {study.sensor['wavelength_min'] * 1e9:.0f}-"
@@ -169,10 +169,10 @@ def _context(ds: xr.Dataset) -> _Context:
     if fixed:
         lines.append(", ".join(fixed))
     frequency = ds["frequency"].values if "frequency" in ds.coords else None
-    return _Context("\n".join(lines), frequency)
+    return Context("\n".join(lines), frequency)
 
 
-def _study_of(ds: xr.Dataset):
+def study_of(ds: xr.Dataset):
     """The study a result was made from (its ``xbsm_study`` attribute), if it still parses."""
     text = ds.attrs.get("xbsm_study")
     if not text:
@@ -185,7 +185,7 @@ def _study_of(ds: xr.Dataset):
         return None
 
 
-def _suptitle(fig, text: str) -> None:
+def set_suptitle(fig, text: str) -> None:
     """The figure title, each line wrapped to the figure's width."""
     width = max(40, int(fig.get_figwidth() * 12))
     lines = [textwrap.fill(line, width) for line in text.strip().splitlines()]

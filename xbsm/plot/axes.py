@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ._goal import _answer, _draw_goal_lines, _finish_goal_axes, _goal_legend
-from ._layout import _mark_handles, _run_starts, _x_values
-from ._panels import _FrequencyAxis, _mtf_handles, _mtf_panel, _noise_panel
-from ._style import _UNIT_TEXT, NIIRS_SCALE, _units, _value_label
+from ._goal import draw_goal_lines, finish_goal_axes, goal_answer, goal_legend
+from ._layout import mark_handles, run_starts, x_values
+from ._panels import FrequencyAxis, mtf_handles, mtf_panel, noise_panel
+from ._style import NIIRS_SCALE, UNIT_TEXT, units_of, value_label
 
 
 def _axes(ax):
@@ -72,16 +72,16 @@ def against_range(da: xr.DataArray, ax=None, hue: str | None = None,
         pick = {hue: k} if k is not None else {}
         line = da.isel(pick)
         x = line["ground_range"].values / 1e3
-        text = _value_label(da, hue, k) if k is not None else label
+        text = value_label(da, hue, k) if k is not None else label
         used |= _line(ax, x, line.values, invalid.isel(pick).values,
                       outside.isel(pick).values, scale, text, kwargs)
     ax.set_xlabel("ground range [km]")
-    name, units = da.attrs.get("long_name", da.name or ""), _units(da)
-    ax.set_ylabel(f"{name} [{_UNIT_TEXT.get(units, units)}]" if units not in ("", "1")
+    name, units = da.attrs.get("long_name", da.name or ""), units_of(da)
+    ax.set_ylabel(f"{name} [{UNIT_TEXT.get(units, units)}]" if units not in ("", "1")
                   else name)
     if scale is not None:
         ax.set_ylim(*scale)
-    marks = _mark_handles(used, scale or (np.nan, np.nan), "NIIRS" if scale else str(name),
+    marks = mark_handles(used, scale or (np.nan, np.nan), "NIIRS" if scale else str(name),
                           calibrated=False)
     if hue is not None or label is not None or marks:
         handles, _ = ax.get_legend_handles_labels()
@@ -127,7 +127,7 @@ def _line(ax, x, y, invalid, outside, scale, label, kwargs) -> set:
         used.add("outside")
     for name, mask, level, marker in (("below", below, lo, "v"), ("above", above, hi, "^"),
                                       ("invalid", ~valid, lo, "x")):
-        starts = _run_starts(mask)
+        starts = run_starts(mask)
         if starts.any() and np.isfinite(level):
             ax.plot(x[starts], np.full(starts.sum(), level), marker, color=color, ms=7,
                     clip_on=False, zorder=5)
@@ -159,12 +159,12 @@ def noise_breakdown(snr: xr.Dataset, ax=None, sensor: xr.Dataset | None = None):
     """
     ax = _axes(ax)
     if sensor is not None:
-        snr = _with_self_emission_split(snr, sensor)
-    _noise_panel(ax, snr, {})
+        snr = with_self_emission_split(snr, sensor)
+    noise_panel(ax, snr, {})
     return ax
 
 
-def _with_self_emission_split(ds: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
+def with_self_emission_split(ds: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
     """``ds`` with the self-emission noise split by source, if it has that noise.
 
     On the result's own ``wavelength`` grid (:func:`xbsm.snr`), else on 201
@@ -214,11 +214,11 @@ def mtf_breakdown(otf: xr.Dataset, focal_length: float, nyquist: float | None = 
             orientation=0)
     otf = otf.rename({name: f"mtf_{name}" for name in otf.data_vars})
     to_mm = 1e-3 / focal_length
-    axis = _FrequencyAxis(np.asarray(otf["frequency"].values, dtype=float) * to_mm,
+    axis = FrequencyAxis(np.asarray(otf["frequency"].values, dtype=float) * to_mm,
                           "spatial frequency at the focal plane [cycles/mm]",
                           None if nyquist is None else nyquist * to_mm)
-    ones = _mtf_panel(ax, otf.drop_vars(["mtf_flags"], errors="ignore"), {}, axis)
-    ax.legend(handles=_mtf_handles([ax], ones), fontsize="small")
+    ones = mtf_panel(ax, otf.drop_vars(["mtf_flags"], errors="ignore"), {}, axis)
+    ax.legend(handles=mtf_handles([ax], ones), fontsize="small")
     ax.set_ylabel("MTF")
     return ax
 
@@ -260,10 +260,10 @@ def range_performance(goal: xr.Dataset, x: str | None = None, hue: str | None = 
     """
     from ..study.goals import GOAL_FLAGS
 
-    answer = _answer(goal, x, hue)
-    xs, xlabel = _x_values(answer.da, answer.x)
+    answer = goal_answer(goal, x, hue)
+    xs, xlabel = x_values(answer.da, answer.x)
     ax = _axes(ax)
-    seen = _draw_goal_lines(ax, answer, xs, GOAL_FLAGS)
-    _finish_goal_axes(ax, answer, xs, xlabel)
-    _goal_legend(ax, answer, seen)
+    seen = draw_goal_lines(ax, answer, xs, GOAL_FLAGS)
+    finish_goal_axes(ax, answer, xs, xlabel)
+    goal_legend(ax, answer, seen)
     return ax

@@ -17,17 +17,18 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .. import __version__, flags
+from .. import flags
+from .._version import __version__
 from ..interrupts import stop_if_interrupted
-from ._layout import _against, _Curves, _layout
+from ._layout import Curves, layout_of, plot_against
 from ._panels import (
-    _at,
-    _frequency_axis,
-    _mtf_handles,
-    _mtf_panel,
-    _noise_panel,
-    _orientations,
-    _point,
+    frequency_axis,
+    mtf_handles,
+    mtf_panel,
+    nearest_point,
+    noise_panel,
+    orientation_rows,
+    select_at,
 )
 from ._style import (
     DPI,
@@ -36,15 +37,15 @@ from ._style import (
     NIIRS_SCALE,
     NOISE_POINT,
     SNR_FLOOR,
-    _Context,
-    _context,
-    _quantity,
-    _study_of,
-    _suptitle,
-    _value_label,
-    _words,
+    Context,
+    context_of,
+    set_suptitle,
+    study_of,
+    value_label,
+    with_unit,
+    words,
 )
-from .axes import _with_self_emission_split
+from .axes import with_self_emission_split
 
 
 def _bits(ds: xr.Dataset, like: xr.DataArray, names=None, group=None) -> xr.DataArray:
@@ -67,11 +68,11 @@ def _bits(ds: xr.Dataset, like: xr.DataArray, names=None, group=None) -> xr.Data
 def _squeeze(ds: xr.Dataset, da: xr.DataArray) -> tuple[xr.DataArray, str]:
     """``da`` without its length-1 dimensions, and their values for the title."""
     single = [d for d in da.dims if da.sizes[d] == 1]
-    labels = ", ".join(_value_label(ds, d, 0) for d in single)
+    labels = ", ".join(value_label(ds, d, 0) for d in single)
     return da.squeeze(single), f": {labels}" if labels else ""
 
 
-def _niirs_figures(ds: xr.Dataset, ctx: _Context):
+def _niirs_figures(ds: xr.Dataset, ctx: Context):
     """Figure 2: NIIRS against range, one figure per GIQE version."""
     if "niirs" not in ds:
         return
@@ -79,56 +80,56 @@ def _niirs_figures(ds: xr.Dataset, ctx: _Context):
     for version in versions:
         da = ds["niirs"].sel(giqe=version) if version is not None else ds["niirs"]
         da, single = _squeeze(ds, da)
-        layout = _layout(da)
+        layout = layout_of(da)
         if layout is None:
             return
         flagged = ds if version is None or "flags" not in ds else ds.sel(giqe=version)
         label = f"NIIRS (GIQE {int(version)})" if version is not None else "NIIRS"
-        curves = _Curves(da, _bits(flagged, da, group=flags.is_invalid),
+        curves = Curves(da, _bits(flagged, da, group=flags.is_invalid),
                          _bits(flagged, da, group=flags.is_outside_calibration), label,
                          NIIRS_SCALE, log=False, calibrated=True)
         name = f"figure2_niirs_giqe{int(version)}.png" if version is not None else (
             "figure2_niirs.png")
-        yield name, _against(curves, layout, f"{label} against {_words(layout.x)}{single}\n"
+        yield name, plot_against(curves, layout, f"{label} against {words(layout.x)}{single}\n"
                              f"{ctx.title}")
 
 
-def _snr_figure(ds: xr.Dataset, ctx: _Context):
+def _snr_figure(ds: xr.Dataset, ctx: Context):
     """Figure 3: contrast SNR against range (log axis)."""
     if "snr" not in ds:
         return
     da, single = _squeeze(ds, ds["snr"])
-    layout = _layout(da)
+    layout = layout_of(da)
     if layout is None:
         return
     invalid = _bits(ds, da, names=("beyond_database", "snr_nonpositive"))
-    curves = _Curves(da, invalid, xr.zeros_like(da, dtype=bool), "contrast SNR",
+    curves = Curves(da, invalid, xr.zeros_like(da, dtype=bool), "contrast SNR",
                      (SNR_FLOOR, np.inf), log=True, calibrated=False)
-    yield "figure3_snr.png", _against(curves, layout, f"contrast SNR against "
-                                      f"{_words(layout.x)}{single}\n{ctx.title}")
+    yield "figure3_snr.png", plot_against(curves, layout, f"contrast SNR against "
+                                      f"{words(layout.x)}{single}\n{ctx.title}")
 
 
 
-def _noise_figure(ds: xr.Dataset, ctx: _Context):
+def _noise_figure(ds: xr.Dataset, ctx: Context):
     """Figure 4: the noise breakdown at 20 km ground range, 5 km visibility (or nearest)."""
     if "total_noise" not in ds:
         return
     from matplotlib.figure import Figure
 
-    selector, described = _point(ds, NOISE_POINT, keep=("band",))
+    selector, described = nearest_point(ds, NOISE_POINT, keep=("band",))
     bands = list(range(ds.sizes["band"])) if "band" in ds.dims else [None]
     fig = Figure(figsize=(1.0 + 4.6 * len(bands), 5.2), layout="constrained")
     axes = fig.subplots(1, len(bands), squeeze=False, sharey=True)[0]
     for ax, band in zip(axes, bands, strict=True):
         pick = {**selector, **({"band": band} if band is not None else {})}
         point = _split_self_emission(ds.isel({d: i for d, i in pick.items() if d in ds.dims}))
-        _noise_panel(ax, point, {})
+        noise_panel(ax, point, {})
         if band is not None:
-            ax.set_title(_value_label(ds, "band", band), fontsize="medium")
+            ax.set_title(value_label(ds, "band", band), fontsize="medium")
         if ax is not axes[0]:
             ax.set_ylabel("")
     where = " at " + ", ".join(described) if described else ""
-    _suptitle(fig, f"Noise breakdown{where} (total: root sum square of the terms)\n"
+    set_suptitle(fig, f"Noise breakdown{where} (total: root sum square of the terms)\n"
                    f"{ctx.title}")
     yield "figure4_noise.png", fig
 
@@ -140,7 +141,7 @@ def _split_self_emission(point: xr.Dataset) -> xr.Dataset:
     The sensor is rebuilt from the result's study (``xbsm_study``) at this scenario
     (its band and swept values); without a study that still parses, ``point`` as is.
     """
-    study = _study_of(point)
+    study = study_of(point)
     if study is None or "self_emission_noise" not in point:
         return point
     from .. import params
@@ -157,10 +158,10 @@ def _split_self_emission(point: xr.Dataset) -> xr.Dataset:
         sensor = params.sensor(**{k: v for k, v in values.items() if k in SENSOR_PARAMETERS})
     except ValueError:
         return point
-    return _with_self_emission_split(point, sensor)
+    return with_self_emission_split(point, sensor)
 
 
-def _mtf_figure(ds: xr.Dataset, ctx: _Context):
+def _mtf_figure(ds: xr.Dataset, ctx: Context):
     """Figure 5: the MTF breakdown at 0 and 100 km ground range, red band, 23 km visibility."""
     if "mtf_system" not in ds:
         return
@@ -169,25 +170,25 @@ def _mtf_figure(ds: xr.Dataset, ctx: _Context):
                          "(xbsm.study results carry one)")
     from matplotlib.figure import Figure
 
-    selector, described = _point(ds, {"band": "red", **MTF_POINT}, keep=("ground_range",))
+    selector, described = nearest_point(ds, {"band": "red", **MTF_POINT}, keep=("ground_range",))
     ranges = sorted({int(np.abs(ds["ground_range"].values - r).argmin()) for r in
                      MTF_RANGES}) if "ground_range" in ds.dims else [None]
-    rows, ones = _orientations(ds), []
+    rows, ones = orientation_rows(ds), []
     fig = Figure(figsize=(1.0 + 4.8 * len(ranges), 2.0 + 3.8 * len(rows)), layout="constrained")
     axes = fig.subplots(len(rows), len(ranges), squeeze=False, sharey=True)
     for i, row in enumerate(rows):
         for j, gr in enumerate(ranges):
             pick = {**selector, **({"ground_range": gr} if gr is not None else {}),
                     **({"orientation": row} if row is not None else {})}
-            axis = _frequency_axis(ds, pick, np.asarray(ctx.frequency, dtype=float))
-            ones += _mtf_panel(axes[i, j], ds, pick, axis)
+            axis = frequency_axis(ds, pick, np.asarray(ctx.frequency, dtype=float))
+            ones += mtf_panel(axes[i, j], ds, pick, axis)
             axes[i, j].set_title(_mtf_title(ds, pick, row), fontsize="medium")
         axes[i, 0].set_ylabel("MTF")
-    fig.legend(handles=_mtf_handles(axes, ones), loc="outside lower center", fontsize="small",
+    fig.legend(handles=mtf_handles(axes, ones), loc="outside lower center", fontsize="small",
                ncols=4, frameon=False)
     if rows == [0]:
         described.append(f"{ds['orientation'].values[0]} orientation (x and y identical)")
-    _suptitle(fig, f"MTF breakdown: {', '.join(described)}\n{ctx.title}")
+    set_suptitle(fig, f"MTF breakdown: {', '.join(described)}\n{ctx.title}")
     yield "figure5_mtf.png", fig
 
 
@@ -195,11 +196,11 @@ def _mtf_title(ds: xr.Dataset, pick: dict, row) -> str:
     parts = []
     if "ground_range" in pick:
         values = ds["ground_range"].values
-        parts.append(_quantity(values[pick["ground_range"]], "m", values) + " ground range")
+        parts.append(with_unit(values[pick["ground_range"]], "m", values) + " ground range")
     if "effective_integration_time" in ds:
-        seconds = float(_at(ds, "effective_integration_time", pick))
-        parts.append(f"integration time {_quantity(seconds, 's')}")
-    if row is not None and len(_orientations(ds)) > 1:
+        seconds = float(select_at(ds, "effective_integration_time", pick))
+        parts.append(f"integration time {with_unit(seconds, 's')}")
+    if row is not None and len(orientation_rows(ds)) > 1:
         orientation = ds["orientation"].values[row] if "orientation" in ds.coords else row
         parts.append(f"{orientation} orientation")
     return ", ".join(parts)
@@ -281,7 +282,7 @@ def standard_figures(ds: xr.Dataset, directory) -> list[Path]:
                          "total_noise, mtf_system)")
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    ctx = _context(ds)
+    ctx = context_of(ds)
     written = []
     for figures in (_niirs_figures, _snr_figure, _noise_figure, _mtf_figure):
         for name, fig in figures(ds, ctx):

@@ -26,7 +26,7 @@ import numpy as np
 import scipy
 import xarray as xr
 
-from .. import __version__
+from .._version import __version__
 from ..atmosphere import database_path
 
 MANIFEST = "study.json"

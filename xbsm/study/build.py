@@ -23,7 +23,8 @@ import dask.array as dsa
 import numpy as np
 import xarray as xr
 
-from .. import __version__, model, params
+from .. import model, params
+from .._version import __version__
 from ..methods import method as make_method
 from . import _cf
 from .spec import SCENARIO_PARAMETERS, SENSOR_PARAMETERS, Study

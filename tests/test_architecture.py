@@ -1,0 +1,299 @@
+"""The architecture as a test (prysm's pattern): the package's import rules, checked on its AST.
+
+The architecture notes: "Underscored names are private to their module (or subpackage); an
+architecture test with an allow-list keeps this true." Every module of ``xbsm/`` is
+parsed with :mod:`ast` (nothing is imported) and checked for:
+
+1. **private names across modules**: ``from .x import _y``, ``from . import x`` then
+   ``x._y``, ``import xbsm.x as m`` then ``m._y``: a name ``_y`` defined in one module and
+   used by another; and a private module (``xbsm.study._parts``) imported from outside
+   the package that holds it. A name another module needs is public: drop its
+   underscore. What cannot be fixed yet is in :data:`ALLOWED`, one reason per entry.
+2. **no submodule imports the package root**: ``from .. import __version__``, ``import
+   xbsm``, ``from xbsm import snr``: the root is lazy (PEP 562) and only maps public
+   names to their modules; the version lives in ``xbsm/_version.py``.
+3. **kernels stay free of xarray**: a function named ``_<quantity>_kernel`` (or, where
+   another module composes it, ``<quantity>_kernel``) does not mention ``xr`` or ``xarray``
+   (arithmetic in numpy; xarray labels at the boundary, ``_kernels.apply_kernel``).
+
+Each checker is also run on a small broken source string, so that none passes vacuously.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parent.parent / "xbsm"
+ROOT = "xbsm"
+
+
+def module_names(package: Path = PACKAGE) -> dict[str, Path]:
+    """Dotted module name -> file, for every ``.py`` file of the package."""
+    out = {}
+    for path in sorted(package.rglob("*.py")):
+        parts = path.relative_to(package.parent).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(parts)] = path
+    return out
+
+
+def _is_private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def _resolve(module: str, is_package: bool, node: ast.ImportFrom) -> str:
+    """The absolute module an ``ImportFrom`` names, seen from ``module``."""
+    if node.level == 0:
+        return node.module or ""
+    base = module.split(".")
+    if not is_package:
+        base = base[:-1]
+    base = base[:len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def _private_module_outside(target: str, importer: str) -> bool:
+    """True if ``target`` is (inside) a private module and ``importer`` is outside its package."""
+    parts = target.split(".")
+    for i, part in enumerate(parts):
+        if _is_private(part):
+            package = ".".join(parts[:i])
+            return not (importer == package or importer.startswith(package + "."))
+    return False
+
+
+def private_uses(source: str, module: str, modules, *, is_package: bool = False) -> set:
+    """Rule 1: the (importing module, used name) pairs that break privacy.
+
+    ``modules`` is the set of the package's dotted module names (to tell a submodule
+    from a name defined in a module). A used name is reported as ``"module.name"``.
+    """
+    tree = ast.parse(source)
+    found = set()
+    aliases = {}  # local name -> the package module it is bound to
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] != ROOT:
+                    continue
+                if _private_module_outside(alias.name, module):
+                    found.add((module, alias.name))
+                if alias.asname:
+                    aliases[alias.asname] = alias.name
+                else:  # ``import xbsm.a.b`` binds ``xbsm``
+                    aliases[ROOT] = ROOT
+        elif isinstance(node, ast.ImportFrom):
+            source_module = _resolve(module, is_package, node)
+            if source_module.split(".")[0] != ROOT:
+                continue
+            if _private_module_outside(source_module, module):
+                found.add((module, source_module))
+            for alias in node.names:
+                full = f"{source_module}.{alias.name}"
+                local = alias.asname or alias.name
+                if full in modules:  # a submodule
+                    if _private_module_outside(full, module):
+                        found.add((module, full))
+                    aliases[local] = full
+                elif _is_private(alias.name) and source_module != module:
+                    found.add((module, full))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and _is_private(node.attr):
+            target = _dotted(node.value, aliases)
+            if target is None or target == module:
+                continue
+            full = f"{target}.{node.attr}"
+            if full in modules:  # a private submodule reached as an attribute
+                if _private_module_outside(full, module):
+                    found.add((module, full))
+            else:
+                found.add((module, full))
+    return found
+
+
+def _dotted(node, aliases) -> str | None:
+    """The package module an expression such as ``otf.system`` names, or None."""
+    if isinstance(node, ast.Name):
+        return aliases.get(node.id)
+    if isinstance(node, ast.Attribute):
+        base = _dotted(node.value, aliases)
+        return None if base is None else f"{base}.{node.attr}"
+    return None
+
+
+def root_imports(source: str, module: str, modules, *, is_package: bool = False) -> set:
+    """Rule 2: (module, name) for each import of the package root from a submodule."""
+    if module == ROOT:
+        return set()
+    found = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            found |= {(module, a.name) for a in node.names if a.name == ROOT}
+        elif isinstance(node, ast.ImportFrom) and _resolve(module, is_package, node) == ROOT:
+            found |= {(module, f"{ROOT}.{a.name}") for a in node.names
+                      if f"{ROOT}.{a.name}" not in modules}
+    return found
+
+
+def _is_kernel(name: str) -> bool:
+    """The house name of a kernel: ``_<quantity>_kernel`` or ``<quantity>_kernel``.
+
+    Not ``apply_kernel`` (the boundary that runs kernels) nor ``params._kernel`` (which
+    reads the ``filter_kernel`` parameter).
+    """
+    stem = name.removeprefix("_")
+    return stem.endswith("_kernel") and stem != "kernel" and not stem.startswith("apply_")
+
+
+def kernels_using_xarray(source: str, module: str) -> set:
+    """Rule 3: (module, function) for each kernel function that mentions xarray."""
+    found = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and _is_kernel(node.name):
+            names = {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+            if names & {"xr", "xarray"}:
+                found.add((module, node.name))
+    return found
+
+
+def _scan(checker, **kwargs) -> set:
+    modules = module_names()
+    found = set()
+    for name, path in modules.items():
+        source = path.read_text()
+        if checker is kernels_using_xarray:
+            found |= checker(source, name)
+        else:
+            found |= checker(source, name, modules, is_package=path.name == "__init__.py")
+    return found
+
+
+_VALIDATOR = ("an otf validator: one declared contract per public function replaces the "
+              "per-module validators (issue 22 item 3)")
+_BOUNDARY = ("otf's own kernel boundary, one of the four that issue 22 item 3 merges into "
+             "xr.apply_ufunc")
+
+#: (importing module, private name it uses) -> why it is allowed for now. Keep it shrinking:
+#: when this test was written the package had 88 such pairs (issue 22 counted 133 before the
+#: model chain was written once); the 67 outside these two cases were made public instead.
+ALLOWED: dict[tuple[str, str], str] = {
+    # otf.spectral's validators (_require and its three shorthands), used by every OTF
+    # mechanism: replaced, not renamed, by issue 22 item 3's declared contracts
+    ("xbsm.otf.aperture", "xbsm.otf.spectral._finite"): _VALIDATOR,
+    ("xbsm.otf.aperture", "xbsm.otf.spectral._positive"): _VALIDATOR,
+    ("xbsm.otf.aperture", "xbsm.otf.spectral._require"): _VALIDATOR,
+    ("xbsm.otf.defocus", "xbsm.otf.spectral._nonnegative"): _VALIDATOR,
+    ("xbsm.otf.defocus", "xbsm.otf.spectral._positive"): _VALIDATOR,
+    ("xbsm.otf.detector", "xbsm.otf.spectral._positive"): _VALIDATOR,
+    ("xbsm.otf.detector", "xbsm.otf.spectral._require"): _VALIDATOR,
+    ("xbsm.otf.filters", "xbsm.otf.spectral._nonnegative"): _VALIDATOR,
+    ("xbsm.otf.filters", "xbsm.otf.spectral._positive"): _VALIDATOR,
+    ("xbsm.otf.motion", "xbsm.otf.spectral._finite"): _VALIDATOR,
+    ("xbsm.otf.motion", "xbsm.otf.spectral._nonnegative"): _VALIDATOR,
+    ("xbsm.otf.motion", "xbsm.otf.spectral._positive"): _VALIDATOR,
+    ("xbsm.otf.motion", "xbsm.otf.spectral._require"): _VALIDATOR,
+    ("xbsm.otf.system", "xbsm.otf.spectral._spectral"): _BOUNDARY,
+    ("xbsm.otf.turbulence", "xbsm.otf.spectral._nonnegative"): _VALIDATOR,
+    ("xbsm.otf.turbulence", "xbsm.otf.spectral._positive"): _VALIDATOR,
+    ("xbsm.otf.turbulence", "xbsm.otf.spectral._require"): _VALIDATOR,
+    ("xbsm.otf.turbulence", "xbsm.otf.spectral._spectral"): _BOUNDARY,
+    ("xbsm.otf.wavefront", "xbsm.otf.spectral._nonnegative"): _VALIDATOR,
+    ("xbsm.otf.wavefront", "xbsm.otf.spectral._positive"): _VALIDATOR,
+    ("xbsm.otf.wavefront", "xbsm.otf.spectral._require"): _VALIDATOR,
+}
+
+
+# ---- the package -----------------------------------------------------------------------
+
+
+def test_no_module_uses_another_modules_private_names():
+    assert {"xbsm", "xbsm._chain", "xbsm.otf", "xbsm.otf.system"} <= module_names().keys()
+    found = _scan(private_uses)
+    new = sorted(found - ALLOWED.keys())
+    assert not new, "private names used across modules (make them public, or allow-list " \
+        "with a reason):\n" + "\n".join(f"{a}: {b}" for a, b in new)
+
+
+def test_allow_list_has_no_stale_entries_and_a_reason_for_each():
+    found = _scan(private_uses)
+    stale = sorted(ALLOWED.keys() - found)
+    assert not stale, f"allow-list entries no longer needed: {stale}"
+    assert all(isinstance(r, str) and r.strip() and "\n" not in r for r in ALLOWED.values())
+
+
+def test_no_submodule_imports_the_package_root():
+    assert not sorted(_scan(root_imports))
+
+
+def test_kernels_do_not_use_xarray():
+    kernels = [node.name for path in module_names().values()
+               for node in ast.walk(ast.parse(path.read_text()))
+               if isinstance(node, ast.FunctionDef) and _is_kernel(node.name)]
+    assert len(kernels) > 50  # the scan sees the package's kernels
+    assert not sorted(_scan(kernels_using_xarray))
+
+
+# ---- the checkers themselves, on broken examples ----------------------------------------
+
+_MODULES = {"xbsm", "xbsm.a", "xbsm.b", "xbsm.sub", "xbsm.sub.c", "xbsm.sub._d", "xbsm._e"}
+
+
+@pytest.mark.parametrize(("source", "expected"), [
+    ("from .b import _y", {("xbsm.a", "xbsm.b._y")}),
+    ("from xbsm.b import _y as y", {("xbsm.a", "xbsm.b._y")}),
+    ("from . import b\nb._y()", {("xbsm.a", "xbsm.b._y")}),
+    ("import xbsm.b as m\nm._y", {("xbsm.a", "xbsm.b._y")}),
+    ("from .sub import c\nc._z", {("xbsm.a", "xbsm.sub.c._z")}),
+    ("from . import sub\nsub.c._z", {("xbsm.a", "xbsm.sub.c._z")}),
+    ("from . import _e\n_e._x", {("xbsm.a", "xbsm._e._x")}),
+    ("import xbsm.b\nxbsm.b._y", {("xbsm.a", "xbsm.b._y")}),
+    ("from .sub import _d", {("xbsm.a", "xbsm.sub._d")}),  # a private module, outside sub
+    ("from .sub._d import f", {("xbsm.a", "xbsm.sub._d")}),
+    ("def f():\n    from .b import _y\n    return _y", {("xbsm.a", "xbsm.b._y")}),
+    # allowed: public names, dunders, private modules inside their package, own names
+    ("from .b import y, __doc__\nfrom . import _e\nfrom ._e import g", set()),
+    ("from . import b\nb.y\nb.__name__", set()),
+    ("import numpy as np\nnp._NoValue", set()),
+    ("from .a import _own", set()),
+])
+def test_private_use_checker_catches_broken_examples(source, expected):
+    assert private_uses(source, "xbsm.a", _MODULES) == expected
+
+
+def test_private_use_checker_allows_a_private_module_inside_its_package():
+    assert private_uses("from ._d import f\nfrom . import _d", "xbsm.sub.c", _MODULES) == set()
+    assert private_uses("from ._d import f", "xbsm.sub", _MODULES, is_package=True) == set()
+
+
+@pytest.mark.parametrize(("source", "expected"), [
+    ("from . import __version__", {("xbsm.a", "xbsm.__version__")}),
+    ("from xbsm import snr", {("xbsm.a", "xbsm.snr")}),
+    ("import xbsm", {("xbsm.a", "xbsm")}),
+    ("from . import b", set()),  # a submodule, not the root's namespace
+    ("from ._e import __version__", set()),
+])
+def test_root_import_checker_catches_broken_examples(source, expected):
+    assert root_imports(source, "xbsm.a", _MODULES) == expected
+    if expected:  # the same import one package down
+        down = source.replace("from . ", "from .. ")
+        assert root_imports(down, "xbsm.sub.c", _MODULES) == {("xbsm.sub.c", n)
+                                                              for _, n in expected}
+
+
+def test_kernel_checker_catches_broken_examples():
+    broken = "def _a_kernel(x):\n    return xr.DataArray(x)\n"
+    public = "def a_kernel(x):\n    import xarray\n    return xarray.DataArray(x)\n"
+    nested = "def _a_kernel(x):\n    def f():\n        return xr.zeros_like(x)\n    return f()\n"
+    assert kernels_using_xarray(public, "xbsm.a") == {("xbsm.a", "a_kernel")}
+    assert kernels_using_xarray(nested, "xbsm.a") == {("xbsm.a", "_a_kernel")}
+    not_kernels = ("def apply_kernel(f):\n    return xr.apply_ufunc(f)\n\n"
+                   "def _kernel(k):\n    return xr.DataArray(k)\n")
+    assert kernels_using_xarray(not_kernels, "xbsm.a") == set()
+    fine = ("def _a_kernel(x):\n    return np.sqrt(x)\n\n"
+            "def door(x):\n    return xr.apply_ufunc(x)\n")
+    assert kernels_using_xarray(broken, "xbsm.a") == {("xbsm.a", "_a_kernel")}
+    assert kernels_using_xarray(fine, "xbsm.a") == set()
