@@ -16,7 +16,7 @@ import xbsm.cli
 from xbsm import interrupts, study
 from xbsm.examples import olson_scenario, olson_sensor
 from xbsm.study import _parts, store
-from xbsm.study._lock import OutputLock
+from xbsm.study.store import OutputLock
 
 TINY = """
 title = "tiny"
@@ -201,7 +201,7 @@ def test_a_second_writer_of_one_output_is_refused(tiny, tmp_path):
     path = tmp_path / "out.nc"
     holder = subprocess.Popen(
         [sys.executable, "-c", "import sys, time; from pathlib import Path; "
-         "from xbsm.study._lock import OutputLock\n"
+         "from xbsm.study.store import OutputLock\n"
          "with OutputLock(Path(sys.argv[1]), 'study A'):\n"
          "    print('locked', flush=True); time.sleep(60)", str(path)],
         stdout=subprocess.PIPE, text=True)

@@ -44,8 +44,7 @@ def run(study_file: Path | None, out: Path | None, *, overwrite=False, scheduler
     warning line saying how to draw them (:func:`_draw_or_warn`).
     """
     from . import study
-    from .study._lock import OutputLock
-    from .study.store import check_output
+    from .study.store import OutputLock, check_output
 
     spec = study.load(study_file or default_study_path())
     out = out or Path(spec.output or (Path(study_file or DEFAULT_STUDY).stem + ".nc"))

@@ -37,8 +37,8 @@ from ._parts import atmosphere_checksum, code_commit, stderr_line
 from ._progress import Progress
 from .spec import StudyError
 
-__all__ = ["atmosphere_checksum", "check_output", "dependency_versions", "netcdf_ready",
-           "write"]
+__all__ = ["OutputLock", "atmosphere_checksum", "check_output", "dependency_versions",
+           "netcdf_ready", "write"]
 
 #: Chunks computed per batch and worker: each batch's graph is culled once.
 _BATCH_PER_WORKER = 16
