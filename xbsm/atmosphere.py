@@ -38,8 +38,7 @@ Interpolation between database nodes (``interpolation=``):
     database floor) gives a one-sided slope (the secant without either outer
     table); the bracketing tables, the path radiances, the fallback and its flag
     are ``"same-elevation"``'s, and so is the value where a bracketing value is zero.
-``"extinction-profile"`` (default of the ``accurate`` and ``fast`` presets, so of
-:func:`atmosphere_at`)
+``"extinction-profile"`` (default of the ``accurate`` and ``fast`` presets, so of :func:`atmosphere_at`)
     ``"optical-depth-cubic"`` with its increment over the lower bracketing table scaled
     so that, straight down, it equals the vertical optical depth of an extinction
     profile built from the tables' nadir columns: in each interval between tables,

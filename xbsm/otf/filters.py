@@ -67,7 +67,7 @@ def _as_kernel(kernel) -> np.ndarray:
 
 
 def pybsm_filter_kernel(u, v, kernel, ifov):
-    """Look up pyBSM 0.16.1's table of |FFT2(kernel)|, quirks included."""
+    """Look up pyBSM 0.16.1's table of ``|FFT2(kernel)|``, quirks included."""
     n = PYBSM_FFT_SIZE
     table = np.abs(sp_fft.fftshift(sp_fft.fft2(kernel, [n, n])))
     nyquist = 0.5 / ifov
