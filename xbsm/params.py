@@ -28,17 +28,13 @@ import numpy as np
 import xarray as xr
 
 from . import units
-
-WAVELENGTH_MIN = 0.3e-6
-"""Shortest wavelength of the atmosphere database. [m]"""
-WAVELENGTH_MAX = 14.0e-6
-"""Longest wavelength of the atmosphere database. [m]"""
-VISIBILITIES = (23.0, 5.0)
-"""Visibilities in the atmosphere database (MODTRAN IHAZE 1 and 2). [km]"""
-ALTITUDE_RANGE = (2.0, 550e3)
-"""Sensor altitudes covered by the atmosphere database. [m]"""
-GROUND_RANGE_RANGE = (0.0, 300e3)
-"""Ground ranges covered by the atmosphere database. [m]"""
+from .atmosphere.database import (  # the database's facts, re-exported where they bound inputs
+    ALTITUDE_RANGE,
+    GROUND_RANGE_RANGE,
+    VISIBILITIES,
+    WAVELENGTH_MAX,
+    WAVELENGTH_MIN,
+)
 
 
 @dataclass(frozen=True)
