@@ -211,7 +211,7 @@ def load_database(path=None) -> Database:
     Parameters
     ----------
     path : str or os.PathLike, optional
-        Database file; see :func:`database_path`.
+        Database file (default: the packaged one, found once); see :func:`database_path`.
 
     Returns
     -------
