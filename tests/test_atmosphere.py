@@ -38,6 +38,8 @@ def test_database_facts_are_the_files_coordinates(db):
     # xbsm.atmosphere.database states the nodes once (paper Appendix A); params, examples
     # and the flag texts use them: they must be the file's
     assert tuple(db.visibility) == atm.VISIBILITIES
+    with netCDF4.Dataset(atm.database_path()) as nc:
+        assert tuple(nc["ihaze"][:].tolist()) == atm.IHAZE
     assert tuple(db.altitude) == atm.ALTITUDES and tuple(db.ground_range) == atm.GROUND_RANGES
     assert atm.ALTITUDE_RANGE == (db.altitude[0], db.altitude[-1])
     assert atm.GROUND_RANGE_RANGE == (db.ground_range[0], db.ground_range[-1])

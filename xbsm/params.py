@@ -141,7 +141,8 @@ SPECTRAL = ("optics_transmission", "quantum_efficiency", "stray_irradiance")
 SCENARIO_SPECS: dict[str, Spec] = {
     "altitude": Spec("m", "sensor altitude above ground", *ALTITUDE_RANGE),
     "ground_range": Spec("m", "ground range from sensor nadir to target", *GROUND_RANGE_RANGE),
-    "visibility": Spec("km", "meteorological visibility (MODTRAN rural aerosol)", 5.0, 23.0),
+    "visibility": Spec("km", "meteorological visibility (MODTRAN rural aerosol)",
+                       min(VISIBILITIES), max(VISIBILITIES)),
     "platform_speed": Spec("m s-1", "platform ground speed", **NONNEGATIVE),
     "target_reflectance": Spec("1", "target reflectance", **FRACTION),
     "target_temperature": Spec("K", "target temperature", **POSITIVE),

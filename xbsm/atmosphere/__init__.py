@@ -75,7 +75,7 @@ _PUBLIC = {
     "lookup": "lookup",
     **{name: "database" for name in (
         "ALTITUDES", "ALTITUDE_GAP", "ALTITUDE_RANGE", "COMPONENTS", "GROUND_RANGES",
-        "GROUND_RANGE_RANGE", "LONG_NAMES", "UNITS", "VARIABLES", "VISIBILITIES",
+        "GROUND_RANGE_RANGE", "IHAZE", "LONG_NAMES", "UNITS", "VARIABLES", "VISIBILITIES",
         "WAVELENGTH_MAX", "WAVELENGTH_MIN", "Database", "database_path",
         "database_wavelengths", "load_database", "open_atmosphere")},
     **{name: "rules" for name in ("INTERPOLATIONS", "RULES", "SCALE_HEIGHT", "Rule")},

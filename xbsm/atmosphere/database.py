@@ -29,6 +29,7 @@ __all__ = [
     "COMPONENTS",
     "GROUND_RANGES",
     "GROUND_RANGE_RANGE",
+    "IHAZE",
     "LONG_NAMES",
     "UNITS",
     "VARIABLES",
@@ -66,6 +67,8 @@ LONG_NAMES = (
 UNITS = ("1", "W m-2 sr-1 m-1", "W m-2 sr-1 m-1", "W m-2 sr-1 m-1", "W m-2 sr-1 m-1")
 #: Visibilities of the database, in its order (MODTRAN IHAZE 1 and 2). [km]
 VISIBILITIES = (23.0, 5.0)
+#: MODTRAN IHAZE code of each of :data:`VISIBILITIES` (the file's ``ihaze`` coordinate).
+IHAZE = (1, 2)
 #: Sensor altitudes of the database's tables. [m]
 ALTITUDES = (2.0, 32.5, 75.0, 150.0, 225.0, 500.0, *np.arange(1000.0, 12001.0, 1000.0).tolist(),
              14000.0, 16000.0, 18000.0, 20000.0, 24500.0, 550000.0)
