@@ -35,18 +35,15 @@ import numpy as np
 from scipy.special import erfcx
 
 from xbsm.atmosphere import (
-    _GAP,
+    ALTITUDE_GAP,
     COMPONENTS,
     SCALE_HEIGHT,
-    _bracket,
-    _ground_range_at_elevation,
-    _interp,
-    _interpolate_database,
-    _load_database,
-    database_path,
+    interpolate_database,
+    load_database,
 )
+from xbsm.atmosphere.rules import bracket, interpolate
 from xbsm.constants import EARTH_RADIUS
-from xbsm.geometry import slant_range, target_elevation_angle
+from xbsm.geometry import ground_range_at_elevation_kernel, slant_range, target_elevation_angle
 
 WAVELENGTHS_UM = (0.45, 0.6, 1.0, 2.2, 4.0, 10.0)
 #: a value counts when it is at least this fraction of its spectrum's maximum
@@ -76,7 +73,7 @@ def rebuild(db, axis: str, rule: str, v: int, a: int, g: int,
     w = np.array([(x[1] - x[0]) / (x[2] - x[0])])
     low = cube[lo].astype(np.float64)[None]
     high = cube[hi].astype(np.float64)[None]
-    return _interp(low, high, w, rule)[0]
+    return interpolate(low, high, w, rule)[0]
 
 
 def relative_errors(db, axis: str, rule: str, wavelength_index, visibility=None,
@@ -176,7 +173,7 @@ def kernel_errors(db, axis: str, rule, wavelength_index, spacing=2, visibility=N
         gr = np.broadcast_to(gr, other.shape)[keep]
         vis = db.visibility[v[keep]]
         est = (rule(thin, alt, gr, vis) if callable(rule)
-               else _interpolate_database(thin, alt, gr, vis, rule, slice(None)))
+               else interpolate_database(thin, alt, gr, vis, rule, slice(None)))
         true = true[keep].astype(np.float64)
         for c, name in enumerate(COMPONENTS):
             t, e = true[:, c, wavelength_index], est[:, c]
@@ -227,20 +224,20 @@ def _same_elevation_logs(db, altitude, ground_range, visibility):
     v = np.searchsorted(-db.visibility, -visibility)
     elevation = target_elevation_angle(slant_range(ground_range, altitude), altitude)
     sin_e, cos_e = np.sin(elevation), np.cos(elevation)
-    nodes = db.altitude[db.altitude <= _GAP[0]]
+    nodes = db.altitude[db.altitude <= ALTITUDE_GAP[0]]
     last = db.ground_range[-1]
     logs = np.empty((altitude.size, nodes.size, len(_ALONG), db.cube.shape[-1]))
     covered = np.empty((altitude.size, nodes.size), dtype=bool)
     for j, node in enumerate(nodes):  # a loop over the 22 tables, not over scenarios
         same = (node == altitude) | (ground_range == 0.0)
-        g = np.where(same, ground_range, _ground_range_at_elevation(sin_e, cos_e, node))
-        g0, g1, wg = _bracket(np.minimum(g, last), db.ground_range)
+        g = np.where(same, ground_range, ground_range_at_elevation_kernel(sin_e, cos_e, node))
+        g0, g1, wg = bracket(np.minimum(g, last), db.ground_range)
         covered[:, j] = (elevation > 0.0) & (g <= last) & db.present[v, j, g0] & \
             db.present[v, j, g1]
         low = db.cube[v, j, g0][:, _ALONG].astype(np.float64)
         high = db.cube[v, j, g1][:, _ALONG].astype(np.float64)
         with np.errstate(divide="ignore", invalid="ignore"):
-            logs[:, j] = np.log(_interp(low, high, wg, "log"))
+            logs[:, j] = np.log(interpolate(low, high, wg, "log"))
     return nodes, logs, covered, sin_e
 
 
@@ -346,7 +343,7 @@ def multi_node(db, altitude, ground_range, visibility, *, coordinate="optical-pa
     The path radiances, and every scenario where a bracket is not covered or a value
     is not positive, are ``"same-elevation"``'s. Returns (scenario, component, wavelength).
     """
-    base = _interpolate_database(db, altitude, ground_range, visibility, "same-elevation",
+    base = interpolate_database(db, altitude, ground_range, visibility, "same-elevation",
                                  slice(None))
     nodes, logs, covered, sin_e = _same_elevation_logs(db, altitude, ground_range, visibility)
     n = altitude.size
@@ -357,7 +354,7 @@ def multi_node(db, altitude, ground_range, visibility, *, coordinate="optical-pa
         with np.errstate(divide="ignore"):
             column = -np.log(db.cube[:, :nodes.size, 0, 0, :].astype(np.float64))
         x_nodes = np.concatenate([np.zeros((n, 1, column.shape[-1])), column[v]], axis=1)
-        nadir = _interpolate_database(db, altitude, 0.0 * altitude, visibility,
+        nadir = interpolate_database(db, altitude, 0.0 * altitude, visibility,
                                       "optical-depth-cubic", slice(None))
         nadir_target = -np.log(nadir[:, 0])  # the package's cubic at ground range 0
     elif callable(scale_height):  # a scale height per (visibility, wavelength) of the database
@@ -373,7 +370,7 @@ def multi_node(db, altitude, ground_range, visibility, *, coordinate="optical-pa
     tau = np.concatenate([np.zeros((n, 1, logs.shape[-1])), -logs[:, :, 0]], axis=1)
     lnc = np.concatenate([np.full((n, 1, 2, logs.shape[-1]), np.nan), logs[:, :, 1:]], axis=1)
     covered = np.concatenate([np.ones((n, 1), dtype=bool), covered], axis=1)
-    a0, a1, _ = _bracket(altitude, nodes)
+    a0, a1, _ = bracket(altitude, nodes)
     on_node = a0 == a1
     i1 = a0 + 1
     i2 = np.minimum(np.where(on_node, a0 + 2, a1 + 1), nodes.size)
@@ -418,13 +415,14 @@ def multi_node(db, altitude, ground_range, visibility, *, coordinate="optical-pa
             c_step = _monotone_cubic(x, c, ok[:, [0, 3]] & (stencil[:, [0]] > 0), target, slopes
                                      if slopes != "exp-fit" else "pchip")
             out[:, component] = np.exp(c[:, 1] + np.where(on_node[:, None], 0.0, c_step))
-    usable = ok[:, 1] & ok[:, 2] & (db.altitude[np.minimum(a1, db.altitude.size - 1)] <= _GAP[0])
+    top = db.altitude[np.minimum(a1, db.altitude.size - 1)]
+    usable = ok[:, 1] & ok[:, 2] & (top <= ALTITUDE_GAP[0])
     along = out[:, _ALONG]
     bad = ~usable[:, None, None] | ~np.isfinite(along) | (along <= 0.0)
     out[:, _ALONG] = np.where(bad, base[:, _ALONG], along)
     if coordinate == "nadir-column":  # the package's rule where the columns are no coordinate
         increasing = (np.diff(x, axis=1) > 0.0).all(axis=1) & np.isfinite(x).all(axis=1)
-        cubic = _interpolate_database(db, altitude, ground_range, visibility,
+        cubic = interpolate_database(db, altitude, ground_range, visibility,
                                       "optical-depth-cubic", slice(None))
         out[:, _ALONG] = np.where(increasing[:, None], out[:, _ALONG], cubic[:, _ALONG])
     return out
@@ -486,12 +484,12 @@ def local_scale_heights(db, altitude, visibility, fallback=SCALE_HEIGHT,
     three midpoints. Only the tables in ``db`` are used.
     """
     v = np.searchsorted(-db.visibility, -visibility)
-    nodes = db.altitude[db.altitude <= _GAP[0]]
+    nodes = db.altitude[db.altitude <= ALTITUDE_GAP[0]]
     heights = np.concatenate([[0.0], nodes])
     with np.errstate(divide="ignore"):
         tau = -np.log(db.cube[:, :nodes.size, 0, 0, :].astype(np.float64))
     tau = np.concatenate([np.zeros_like(tau[:, :1]), tau], axis=1)  # the ground: 0
-    a0, a1, _ = _bracket(altitude, nodes)
+    a0, a1, _ = bracket(altitude, nodes)
     lo = a0 + 1  # the lower bracket among heights (the ground is 0)
     hi = np.minimum(np.maximum(a1, a0 + 1) + 1, heights.size - 1)  # above 24.5 km: no table
     below, above = lo - 1, np.minimum(hi + 1, heights.size - 1)
@@ -551,7 +549,7 @@ def print_candidate_tables(db, wl, axes=("altitude", "ground_range")):
 
 
 def main() -> int:
-    db = _load_database(str(database_path()))
+    db = load_database()
     wl = np.array([int(np.argmin(np.abs(db.wavelength - w * 1e-6))) for w in WAVELENGTHS_UM])
     if "--candidates" in sys.argv[1:]:  # only the candidate rules' table
         print_candidate_tables(db, wl)

@@ -1,6 +1,7 @@
 """Cost of each atmosphere interpolation rule in the package's kernel.
 
-``_atmosphere_kernel`` (the numpy function that ``atmosphere_at`` wraps) on 20,000
+``xbsm.atmosphere.interpolate_database`` (the numpy interpolation that ``atmosphere_at``
+wraps, without its flags) on 20,000
 random scenarios: altitude log-uniform in 2 m-20 km, ground range uniform in
 0-100 km, both visibilities; two wavelength windows, 0.4-0.9 um (51 samples) and
 8-12 um (401). The rules alternate within each of ``--repeats`` rounds, so the load of
@@ -24,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from xbsm.atmosphere import INTERPOLATIONS, _atmosphere_kernel, _load_database, database_path
+from xbsm.atmosphere import INTERPOLATIONS, interpolate_database, load_database
 
 OUT = Path(__file__).resolve().parent.parent / "docs" / "benchmarks" / "bench_atmosphere_rules.json"
 WINDOWS_UM = {"0.4-0.9 um": (0.4, 0.9), "8-12 um": (8.0, 12.0)}
@@ -42,8 +43,7 @@ def main() -> int:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--scenarios", type=int, default=20_000)
     args = parser.parse_args()
-    path = str(database_path())
-    db = _load_database(path)
+    db = load_database()
     altitude, ground_range, visibility = scenarios(args.scenarios)
     report = {"scenarios": args.scenarios, "repeats": args.repeats, "us_per_scenario": {}}
     for label, (lo, hi) in WINDOWS_UM.items():
@@ -52,13 +52,12 @@ def main() -> int:
         window = slice(int(index[0]), int(index[-1]) + 1)
         times = {rule: [] for rule in RULES}
         for rule in RULES:  # warm-up: caches (the database, the extinction profile)
-            _atmosphere_kernel(altitude[:100], ground_range[:100], visibility[:100], None,
-                               path=path, interpolation=rule, window=window)
+            interpolate_database(db, altitude[:100], ground_range[:100], visibility[:100],
+                                 rule, window)
         for _ in range(args.repeats):
             for rule in RULES:
                 start = time.perf_counter()
-                _atmosphere_kernel(altitude, ground_range, visibility, None, path=path,
-                                   interpolation=rule, window=window)
+                interpolate_database(db, altitude, ground_range, visibility, rule, window)
                 times[rule].append((time.perf_counter() - start) / args.scenarios * 1e6)
         report["us_per_scenario"][label] = {
             "wavelengths": index.size,

@@ -32,15 +32,12 @@ import xarray as xr
 from _pybsm_runner import run_pybsm
 
 import xbsm
+from xbsm.atmosphere import VISIBILITIES
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
-GROUND_RANGES = np.concatenate([
-    [0.0, 100.0, 500.0], np.arange(1000.0, 20001.0, 1000.0),
-    np.arange(22000.0, 80001.0, 2000.0), np.arange(85000.0, 300001.0, 5000.0),
-])
+GROUND_RANGES = np.array(xbsm.atmosphere.GROUND_RANGES)  # every database ground range
 FOCAL_LENGTHS = np.linspace(2.0, 6.0, 25)
 ALTITUDES = (9000.0, 12000.0)
-VISIBILITIES = (23.0, 5.0)
 OLSON = dict(D=0.275, p_x=8e-6, eta=0.4, int_time=0.03, read_noise=25.0, max_n=96000.0,
              bit_depth=11.9, max_well_fill=0.6, s_x=5e-7, s_y=5e-7, da_x=1e-4, da_y=1e-4,
              dark_current=1e-5 * 64e-12 / 1.60217662e-19,

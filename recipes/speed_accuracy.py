@@ -72,6 +72,7 @@ import xarray as xr
 from _provenance import machine
 
 import xbsm
+from xbsm.atmosphere import VISIBILITIES
 from xbsm.flags import has_flag
 from xbsm.model import niirs
 from xbsm.quadrature import pybsm_slice_count
@@ -83,7 +84,6 @@ GIQE = (3, 4, 5)
 GROUND_RANGES = np.concatenate([[0.0, 100.0, 500.0], np.arange(1000.0, 20001.0, 1000.0),
                                 np.arange(22000.0, 60001.0, 2000.0)])
 ALTITUDES = (3000.0, 9000.0)
-VISIBILITIES = (23.0, 5.0)
 IHAZE = {23.0: 1, 5.0: 2}
 
 _OLSON = dict(D=0.275, f=4.0, p_x=8e-6, eta=0.4, int_time=0.03, read_noise=25.0, max_n=96000.0,

@@ -21,6 +21,7 @@ from scipy.integrate import quad
 import xbsm
 from xbsm import _chain, geometry
 from xbsm import atmosphere as atm
+from xbsm.atmosphere._profile import profile_of  # the profile itself, tested here
 from xbsm.examples import olson_scenario, olson_sensor
 from xbsm.flags import FLAGS, has_flag
 
@@ -30,7 +31,34 @@ IHAZE_TO_VISIBILITY = {1: 23.0, 2: 5.0}
 
 @pytest.fixture(scope="module")
 def db():
-    return atm._load_database(str(atm.database_path()))
+    return atm.load_database()
+
+
+def test_database_facts_are_the_files_coordinates(db):
+    # xbsm.atmosphere.database states the nodes once (paper Appendix A); params, examples
+    # and the flag texts use them: they must be the file's
+    assert tuple(db.visibility) == atm.VISIBILITIES
+    with netCDF4.Dataset(atm.database_path()) as nc:
+        assert tuple(nc["ihaze"][:].tolist()) == atm.IHAZE
+    assert tuple(db.altitude) == atm.ALTITUDES and tuple(db.ground_range) == atm.GROUND_RANGES
+    assert atm.ALTITUDE_RANGE == (db.altitude[0], db.altitude[-1])
+    assert atm.GROUND_RANGE_RANGE == (db.ground_range[0], db.ground_range[-1])
+    assert atm.ALTITUDE_GAP == tuple(db.altitude[-2:])
+    np.testing.assert_allclose([db.wavelength[0], db.wavelength[-1]],
+                               [atm.WAVELENGTH_MIN, atm.WAVELENGTH_MAX], rtol=1e-9)
+    assert np.isnan(db.cube[:, -1, 1:]).all()  # above the gap: ground range 0 only
+
+
+def test_interpolate_database_names_the_rule_it_rejects(db):
+    with pytest.raises(ValueError, match="interpolation must be one of"):
+        atm.interpolate_database(db, 9000.0, 20e3, 5.0, "cubic")
+
+
+def test_every_rule_is_a_row_of_the_dispatch_table():
+    assert atm.INTERPOLATIONS == tuple(atm.RULES)
+    assert all(atm.RULES[name].name == name for name in atm.INTERPOLATIONS)
+    line_of_sight = [r.name for r in atm.RULES.values() if r.line_of_sight]
+    assert line_of_sight == ["same-elevation", "optical-depth-cubic", "extinction-profile"]
 
 
 @pytest.fixture(scope="module")
@@ -186,7 +214,13 @@ def _leave_one_out(db, v, a, g, axis, rule, log_coordinate=False):
     x = np.log(nodes[i - 1:i + 2]) if log_coordinate else nodes[i - 1:i + 2]
     w = np.array([(x[1] - x[0]) / (x[2] - x[0])])
     low, high = db.cube[lo].astype(float)[None], db.cube[hi].astype(float)[None]
-    return atm._interp(low, high, w, rule)[0]
+    return atm.rules.interpolate(low, high, w, rule)[0]
+
+
+def _window(wavelength, lo, hi):
+    """Slice of the database wavelengths in [lo, hi]."""
+    index = np.flatnonzero((wavelength >= lo) & (wavelength <= hi))
+    return slice(int(index[0]), int(index[-1]) + 1)
 
 
 def _index(nodes, value):
@@ -253,7 +287,7 @@ def test_ground_range_at_elevation_inverts_the_curved_earth_geometry():
     for altitude in (2.0, 500.0, 3000.0, 20000.0):
         g = ground_range[ground_range < 0.95 * np.sqrt(2 * 6378.164e3 * altitude)]
         e = geometry.target_elevation_angle(geometry.slant_range(g, altitude), altitude)
-        back = atm._ground_range_at_elevation(np.sin(e), np.cos(e), altitude)
+        back = geometry.ground_range_at_elevation_kernel(np.sin(e), np.cos(e), altitude)
         np.testing.assert_allclose(back, g, rtol=1e-9, atol=1e-6)
 
 
@@ -264,12 +298,12 @@ def _altitude_leave_one_out(db, rule, wavelength_index, components=(0, 4)):
     for a in range(1, 21):
         keep = db.present[:, a] & db.present[:, a - 1] & db.present[:, a + 1]
         v, g = np.nonzero(keep)
-        thin = atm._Database(
+        thin = atm.Database(
             visibility=db.visibility, altitude=np.delete(db.altitude, a),
             ground_range=db.ground_range, wavelength=db.wavelength[wavelength_index],
             cube=np.delete(db.cube[..., wavelength_index], a, axis=1),
             present=np.delete(db.present, a, axis=1))
-        est = atm._interpolate_database(thin, np.full(v.size, db.altitude[a]),
+        est = atm.interpolate_database(thin, np.full(v.size, db.altitude[a]),
                                         db.ground_range[g], db.visibility[v], rule, slice(None))
         true = db.cube[v, a, g].astype(float)
         for c in components:
@@ -323,7 +357,7 @@ def test_extinction_profile_at_nadir_is_the_profile_integral(db, altitude, visib
     # interval's extinction profile (here by scipy's adaptive quad, not the kernel's
     # Gauss-Legendre rule), and the profile's mean over the interval is the one the two
     # tables' nadir transmittances give
-    profile = db.extinction_profile
+    profile = profile_of(db)
     w = int(np.argmin(np.abs(db.wavelength - wavelength)))
     v = int(np.flatnonzero(db.visibility == visibility)[0])
     lower = int(np.searchsorted(db.altitude, altitude)) - 1
@@ -355,14 +389,14 @@ def test_extinction_profile_factor_shared_across_ground_ranges_equals_each_its_o
     altitude = np.repeat([150.0, 1500.0, 2500.0, 7300.0], 25)
     ground_range = rng.uniform(0.0, 60e3, altitude.size)
     visibility = np.tile([5.0, 23.0], altitude.size // 2)
-    window = atm._wavelength_window(db.wavelength, (0.4e-6, 2.5e-6))
-    together = atm._interpolate_database(db, altitude, ground_range, visibility,
+    window = _window(db.wavelength, 0.4e-6, 2.5e-6)
+    together = atm.interpolate_database(db, altitude, ground_range, visibility,
                                          "extinction-profile", window)
-    alone = np.stack([atm._interpolate_database(db, altitude[i:i + 1], ground_range[i:i + 1],
+    alone = np.stack([atm.interpolate_database(db, altitude[i:i + 1], ground_range[i:i + 1],
                                                 visibility[i:i + 1], "extinction-profile",
                                                 window)[0] for i in range(altitude.size)])
     np.testing.assert_allclose(together, alone, rtol=1e-13, atol=0)
-    cubic = atm._interpolate_database(db, altitude, ground_range, visibility,
+    cubic = atm.interpolate_database(db, altitude, ground_range, visibility,
                                       "optical-depth-cubic", window)
     assert not np.allclose(together, cubic, rtol=1e-3)  # the factor is not 1
 
@@ -399,8 +433,8 @@ def test_same_elevation_falls_back_to_log_linear_beyond_a_tables_coverage_and_fl
 def test_optical_depth_cubic_rebuilds_a_left_out_table_better_than_same_elevation(
         db, removed, visibility, ground_range):
     # one table left out: its TRANS rebuilt from the others over 0.4-2.5 um
-    window = atm._wavelength_window(db.wavelength, (0.4e-6, 2.5e-6))
-    thin = atm._Database(
+    window = _window(db.wavelength, 0.4e-6, 2.5e-6)
+    thin = atm.Database(
         visibility=db.visibility, altitude=np.delete(db.altitude, removed),
         ground_range=db.ground_range, wavelength=db.wavelength[window],
         cube=np.delete(db.cube[..., window], removed, axis=1),
@@ -412,7 +446,7 @@ def test_optical_depth_cubic_rebuilds_a_left_out_table_better_than_same_elevatio
     true = db.cube[v, removed, g, 0, window].astype(float)
 
     def error(rule):
-        est = atm._interpolate_database(thin, altitude, np.array([ground_range]),
+        est = atm.interpolate_database(thin, altitude, np.array([ground_range]),
                                         np.array([visibility]), rule, slice(None))[0, 0]
         keep = true > 1e-3
         return np.abs(est[keep] / true[keep] - 1)
@@ -472,7 +506,7 @@ def test_cubic_rules_are_monotone_along_a_long_low_line_of_sight(db, rule, visib
     nodes = db.altitude[db.altitude <= 8000.0]
     altitude = np.unique(np.concatenate(
         [nodes, *(np.linspace(a, b, 41) for a, b in zip(nodes[:-1], nodes[1:], strict=True))]))
-    ground_range = atm._ground_range_at_elevation(np.sin(elevation), np.cos(elevation),
+    ground_range = geometry.ground_range_at_elevation_kernel(np.sin(elevation), np.cos(elevation),
                                                   altitude)
     out = atm.atmosphere_at(xr.DataArray(altitude, dims="s"),
                             xr.DataArray(ground_range, dims="s"), visibility,

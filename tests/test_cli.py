@@ -12,7 +12,7 @@ import pytest
 import xarray as xr
 
 from xbsm import cli, interrupts
-from xbsm.atmosphere import _load_database, database_path
+from xbsm.atmosphere import database_path, load_database
 
 # 40 altitudes: more panels than the standard figures lay out (issue 21, item 1)
 FORTY_ALTITUDES = """
@@ -109,7 +109,7 @@ def test_a_damaged_database_is_named_in_one_clear_error(tmp_path):
     copy.write_bytes(bytes(data))
     with pytest.raises(ValueError, match=r"atmosphere database .*atmosphere\.nc is damaged "
                                          r"\(NetCDF/HDF error"):
-        _load_database(str(copy))
+        load_database(copy)
 
 
 def test_a_value_error_is_one_line_with_exit_2(tmp_path, capsys, monkeypatch):

@@ -84,6 +84,7 @@ EXPECTED_UNITS = MappingProxyType({
     # geometry
     "slant_range": "m", "elevation_angle": "rad", "target_elevation_angle": "rad",
     "nadir_angle": "rad", "altitude_along_path": "m", "ifov": "rad",
+    "ground_range_at_elevation": "m",
     "ground_sample_distance": "m", "ifov_x": "rad", "ifov_y": "rad", "gsd_x": "m", "gsd_y": "m",
     "otf_weights": "s-1 m-1",
     # atmosphere
@@ -140,11 +141,20 @@ GIQE_CASES = MappingProxyType({"giqe3": 3, "giqe4": 4, "giqe5": 5})
 """Cases that compute one GIQE version."""
 
 NOT_LABELLED = MappingProxyType({
-    "xbsm.atmosphere.open_atmosphere": "the raw database cube; units differ by component "
-    "and are in its component_units coordinate (docs/atmosphere.md)",
-    "xbsm.atmosphere.band_wavelengths": "returns a numpy array",
-    "xbsm.atmosphere.database_path": "returns a path",
-    "xbsm.atmosphere.database_wavelengths": "returns a numpy array",
+    "xbsm.atmosphere.database.open_atmosphere": "the raw database cube; units differ by "
+    "component and are in its component_units coordinate (docs/atmosphere.md)",
+    "xbsm.atmosphere.lookup.band_wavelengths": "returns a numpy array",
+    "xbsm.atmosphere.database.database_path": "returns a path",
+    "xbsm.atmosphere.database.database_wavelengths": "returns a numpy array",
+    "xbsm.atmosphere.database.load_database": "returns the database's numpy arrays",
+    "xbsm.atmosphere.lookup.interpolate_database": "a kernel: plain numpy arrays in and out "
+    "(atmosphere_at labels the same interpolation)",
+    **{f"xbsm.atmosphere.rules.{name}": "a kernel of the fixed-range rules: plain numpy "
+       "arrays in and out (atmosphere_at labels the result)"
+       for name in ("bracket", "fixed_range", "gather", "interpolate", "ln_interpolate")},
+    **{f"xbsm.geometry.{name}": "a kernel: plain numpy arrays in and out, composed by "
+       "xbsm.atmosphere (labelled by viewing_geometry and ground_range_at_elevation)"
+       for name in ("slant_and_elevation_kernel", "ground_range_at_elevation_kernel")},
     "xbsm.radiometry.is_emissive_band": "returns a bool",
     "xbsm.radiometry.resample_spectral": "keeps the attributes of the sensor curve it resamples",
     "xbsm.quadrature.aperture_breakpoints": "returns a numpy array",
@@ -165,7 +175,7 @@ NOT_LABELLED = MappingProxyType({
                     "wavefront.random_phase_kernel")},
     **{f"xbsm.{name}": "a stage's array orchestrator: plain arrays in and out, labelled by "
        "xbsm._chain from the stage's declared outputs (tests/test_chain.py)"
-       for name in ("atmosphere.band_atmosphere_arrays", "geometry.viewing_arrays",
+       for name in ("atmosphere.lookup.band_atmosphere_arrays", "geometry.viewing_arrays",
                     "noise.noise_arrays", "noise.noise_gain_arrays",
                     "quadrature.band_cutoff_arrays", "quadrature.edge_rule_arrays",
                     "quadrature.undersampled_arrays", "radiometry.radiance_arrays",
@@ -175,7 +185,8 @@ NOT_LABELLED = MappingProxyType({
 })
 """Public functions whose result is not a labelled quantity, with the reason."""
 
-MODULES = (atmosphere, geometry, noise, quadrature, radiometry, xbsm.model,
+MODULES = (atmosphere.database, atmosphere.rules, atmosphere.lookup,
+           geometry, noise, quadrature, radiometry, xbsm.model,
            metrics.edge, metrics.grd, metrics.giqe,
            aperture, defocus, detector, filters, motion, psf, spectral, system, turbulence,
            user, wavefront)
@@ -281,6 +292,8 @@ def _cases():
             noise.noise_terms(_signal(), s).self_emission_noise, s, _signal().wavelength),
         # geometry
         "slant_range": lambda: geometry.slant_range(rng, 9000.0),
+        "ground_range_at_elevation": lambda: geometry.ground_range_at_elevation(
+            xr.DataArray([0.1, 0.5, 1.2], dims="elevation"), 9000.0),
         "viewing_geometry": lambda: geometry.viewing_geometry(rng, 9000.0, 8e-6, 8e-6, 4.0),
         "nadir_angle": lambda: _geometry(lambda g, h: geometry.nadir_angle(
             geometry.slant_range(g, h), h)),
@@ -562,7 +575,9 @@ def test_giqe_references_cite_each_version_once():
 
 # ---- module-level tables are immutable ------------------------------------------------
 
-_TABLE_MODULES = ("xbsm.atmosphere", "xbsm.examples", "xbsm.geometry", "xbsm.noise",
+_TABLE_MODULES = ("xbsm.atmosphere.database", "xbsm.atmosphere.rules",
+                  "xbsm.atmosphere.lookup", "xbsm.atmosphere._sight",
+                  "xbsm.atmosphere._profile", "xbsm.examples", "xbsm.geometry", "xbsm.noise",
                   "xbsm.plot", "xbsm.plot._style", "xbsm.quadrature", "xbsm.radiometry",
                   "xbsm.units", "xbsm.study.goals",
                   "xbsm.metrics.edge", "xbsm.metrics.giqe", "xbsm.metrics.grd",

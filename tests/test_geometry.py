@@ -107,14 +107,14 @@ def test_slant_and_elevation_kernel_on_plain_arrays():
     # 21944.568747966005 m and a look-down angle of 0.42415759925679397 rad; pyBSM's law of
     # cosines 21944.568747898647 m and 0.42415759925816854 rad
     h, g = np.array([9000.0]), np.array([20000.0, 0.1])
-    slant, angle = geometry._slant_and_elevation_kernel(h, g, "stable", "look-down")
+    slant, angle = geometry.slant_and_elevation_kernel(h, g, "stable", "look-down")
     assert slant[0] == pytest.approx(21944.568747966005, rel=1e-15)
     assert angle[0] == pytest.approx(0.42415759925679397, rel=1e-14)
-    slant, angle = geometry._slant_and_elevation_kernel(h, g, "law-of-cosines", "look-down")
+    slant, angle = geometry.slant_and_elevation_kernel(h, g, "law-of-cosines", "look-down")
     assert slant[0] == pytest.approx(21944.568747898647, rel=1e-11)
     assert angle[0] == pytest.approx(0.42415759925816854, rel=1e-9)
     # at the target the elevation is the look-down angle less the central angle g / R_e
-    _, target = geometry._slant_and_elevation_kernel(h, g, "stable", "target")
+    _, target = geometry.slant_and_elevation_kernel(h, g, "stable", "target")
     np.testing.assert_allclose(target[0], 0.42415759925679397 - 20000.0 / EARTH_RADIUS,
                                rtol=1e-13)
 
@@ -170,3 +170,13 @@ def test_the_vertical_slant_range_is_nadir_not_nan(form):
     for height in (9000.0, 0.1):
         assert float(geometry.nadir_angle(height, height, form=form)) == pytest.approx(
             0.0, abs=1e-3)
+
+
+def test_ground_range_at_elevation_inverts_slant_range_and_target_elevation():
+    # closed form: slant_range then target_elevation_angle of (ground range, altitude);
+    # the inverse returns the ground range, labelled
+    g = xr.DataArray([0.0, 100.0, 5e3, 60e3, 150e3], dims="g")
+    e = geometry.target_elevation_angle(geometry.slant_range(g, 20e3), 20e3)
+    back = geometry.ground_range_at_elevation(e, 20e3)
+    np.testing.assert_allclose(back, g, rtol=1e-9, atol=1e-6)
+    assert back.attrs["units"] == "m" and back.dims == ("g",)

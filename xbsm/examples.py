@@ -12,6 +12,7 @@ from types import MappingProxyType
 import numpy as np
 import xarray as xr
 
+from .atmosphere.database import GROUND_RANGES, VISIBILITIES
 from .params import scenario, sensor
 from .radiometry import dark_current_from_density
 
@@ -21,12 +22,7 @@ OLSON_BANDS = MappingProxyType({
 })
 """Band edges [m] and band-average quantum efficiency [1] of paper Table 2."""
 
-DATABASE_GROUND_RANGES = np.concatenate([
-    [0.0, 100.0, 500.0],
-    np.arange(1000.0, 20001.0, 1000.0),
-    np.arange(22000.0, 80001.0, 2000.0),
-    np.arange(85000.0, 300001.0, 5000.0),
-])
+DATABASE_GROUND_RANGES = np.array(GROUND_RANGES)
 """The 97 ground ranges of the atmosphere database (paper Appendix A). [m]"""
 DATABASE_GROUND_RANGES.flags.writeable = False  # a read-only table
 
@@ -108,7 +104,7 @@ def olson_scenario(ground_range=None, visibility=None, **overrides) -> xr.Datase
     if ground_range is None:
         ground_range = xr.DataArray(DATABASE_GROUND_RANGES, dims="ground_range")
     if visibility is None:
-        visibility = xr.DataArray([23.0, 5.0], dims="visibility")
+        visibility = xr.DataArray(list(VISIBILITIES), dims="visibility")
     params = dict(altitude=9000.0, ground_range=ground_range, visibility=visibility,
                   platform_speed=100.0)
     params.update(overrides)

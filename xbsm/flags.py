@@ -29,6 +29,7 @@ import numpy as np
 import xarray as xr
 
 from ._kernels import apply_kernel
+from .atmosphere.database import ALTITUDE_GAP
 
 # bit -> (meaning, description). The meanings are CF flag_meanings words.
 FLAGS = MappingProxyType({
@@ -40,7 +41,7 @@ FLAGS = MappingProxyType({
     "atmosphere_sparse": (
         2,
         "atmosphere interpolated across a wide database gap (altitude between "
-        "24.5 km and 550 km)",
+        f"{ALTITUDE_GAP[0] / 1e3:g} km and {ALTITUDE_GAP[1] / 1e3:g} km)",
     ),
     "well_fill_limited": (
         4,

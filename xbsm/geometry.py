@@ -98,8 +98,12 @@ def _nadir_angle_kernel(slant_range, sensor_altitude, target_altitude, form):
     return _nadir_angle_stable(target_altitude, slant_range, sensor_altitude)
 
 
-def _slant_and_elevation_kernel(altitude, ground_range, form, elevation):
-    """Slant range and GIQE elevation angle of a target on the ground."""
+def slant_and_elevation_kernel(altitude, ground_range, form, elevation):
+    """Slant range and GIQE elevation angle of a target on the ground (numpy kernel).
+
+    ``elevation`` is ``"target"`` (:func:`target_elevation_angle`) or ``"look-down"``
+    (:func:`elevation_angle`); ``form`` one of :data:`FORMS`.
+    """
     if form == "law-of-cosines":
         slant = _slant_range_cosines(0.0, altitude, ground_range)
     else:
@@ -109,6 +113,20 @@ def _slant_and_elevation_kernel(altitude, ground_range, form, elevation):
     else:
         angle = _target_elevation_kernel(altitude, 0.0, slant, form)
     return slant, angle
+
+
+def ground_range_at_elevation_kernel(sin_elevation, cos_elevation, sensor_altitude):
+    """Ground range at which a sensor sees a target on the ground at an elevation (numpy kernel).
+
+    The inverse of :func:`slant_and_elevation_kernel` (``"stable"``, ``"target"``) in the
+    ground range, from the sine and cosine of the elevation angle at the target; see
+    :func:`ground_range_at_elevation`. [m]
+    """
+    above = sensor_altitude * (2.0 * EARTH_RADIUS + sensor_altitude)
+    rise = EARTH_RADIUS * sin_elevation
+    slant = above / (np.sqrt(rise * rise + above) + rise)
+    return EARTH_RADIUS * np.arctan2(slant * cos_elevation,
+                                     EARTH_RADIUS + slant * sin_elevation)
 
 
 def _altitude_along_path_kernel(sensor_altitude, slant_range, distance_from_target,
@@ -369,6 +387,43 @@ def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *,
     return named(out, "rad", "elevation angle at the target")
 
 
+def ground_range_at_elevation(elevation_angle, sensor_altitude):
+    r"""Ground range at which a sensor sees a target on the ground at a given elevation.
+
+    The inverse of :func:`slant_range` followed by :func:`target_elevation_angle` in the
+    ground range (target on the surface).
+
+    Parameters
+    ----------
+    elevation_angle : float or xr.DataArray
+        Elevation of the sensor above the target's local horizontal, 0 to :math:`\pi/2`.
+        [rad]
+    sensor_altitude : float or xr.DataArray
+        Sensor height above the surface. [m]
+
+    Returns
+    -------
+    float or xr.DataArray
+        Great-circle distance on the ground between target and sensor nadir. [m]
+
+    Notes
+    -----
+    The slant range solves :math:`(R + h)^2 = R^2 + s^2 + 2 R s \sin e` in the form
+    without cancellation,
+
+    .. math:: s = \frac{h (2R + h)}{\sqrt{R^2 \sin^2 e + h (2R + h)} + R \sin e}
+
+    and the central angle is :math:`\operatorname{atan2}(s \cos e,\ R + s \sin e)`.
+    """
+    out = apply_kernel(_ground_range_at_angle, elevation_angle, sensor_altitude)
+    return named(out, "m", "ground range")
+
+
+def _ground_range_at_angle(elevation_angle, sensor_altitude):
+    return ground_range_at_elevation_kernel(np.sin(elevation_angle), np.cos(elevation_angle),
+                                            sensor_altitude)
+
+
 def viewing_geometry(ground_range, altitude, pixel_pitch_x, pixel_pitch_y, focal_length, *,
                      elevation="target", form="stable") -> xr.Dataset:
     """Slant range, GIQE elevation angle, IFOVs and GSDs of every scenario.
@@ -395,7 +450,7 @@ def viewing_geometry(ground_range, altitude, pixel_pitch_x, pixel_pitch_y, focal
     as_da = [x if isinstance(x, xr.DataArray) else xr.DataArray(x)
              for x in (altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length)]
     altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length = as_da
-    slant, angle = apply_kernel(_slant_and_elevation_kernel, altitude, ground_range,
+    slant, angle = apply_kernel(slant_and_elevation_kernel, altitude, ground_range,
                                 outputs=((), ()), form=form, elevation=elevation)
     out = {"slant_range": slant, "elevation_angle": angle}
     for axis, pitch in (("x", pixel_pitch_x), ("y", pixel_pitch_y)):
@@ -418,7 +473,7 @@ VIEW_OUTPUTS = outputs(
 def viewing_arrays(altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length, *,
                    elevation="target", form="stable") -> dict:
     """:data:`VIEW_OUTPUTS` on plain arrays (one eager scenario; no checks)."""
-    slant, angle = _slant_and_elevation_kernel(altitude, ground_range, form=form,
+    slant, angle = slant_and_elevation_kernel(altitude, ground_range, form=form,
                                                elevation=elevation)
     out = {"slant_range": slant, "elevation_angle": angle}
     for axis, pitch in (("x", pixel_pitch_x), ("y", pixel_pitch_y)):

@@ -15,7 +15,7 @@ import numbers
 from dataclasses import dataclass
 from types import MappingProxyType
 
-from .atmosphere import INTERPOLATIONS
+from .atmosphere.rules import INTERPOLATIONS
 from .constants import CODATA, PYBSM_CODATA_2014, Constants
 from .params import unknown_keyword
 

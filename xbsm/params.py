@@ -28,17 +28,13 @@ import numpy as np
 import xarray as xr
 
 from . import units
-
-WAVELENGTH_MIN = 0.3e-6
-"""Shortest wavelength of the atmosphere database. [m]"""
-WAVELENGTH_MAX = 14.0e-6
-"""Longest wavelength of the atmosphere database. [m]"""
-VISIBILITIES = (23.0, 5.0)
-"""Visibilities in the atmosphere database (MODTRAN IHAZE 1 and 2). [km]"""
-ALTITUDE_RANGE = (2.0, 550e3)
-"""Sensor altitudes covered by the atmosphere database. [m]"""
-GROUND_RANGE_RANGE = (0.0, 300e3)
-"""Ground ranges covered by the atmosphere database. [m]"""
+from .atmosphere.database import (  # the database's facts, re-exported where they bound inputs
+    ALTITUDE_RANGE,
+    GROUND_RANGE_RANGE,
+    VISIBILITIES,
+    WAVELENGTH_MAX,
+    WAVELENGTH_MIN,
+)
 
 
 @dataclass(frozen=True)
@@ -145,7 +141,8 @@ SPECTRAL = ("optics_transmission", "quantum_efficiency", "stray_irradiance")
 SCENARIO_SPECS: dict[str, Spec] = {
     "altitude": Spec("m", "sensor altitude above ground", *ALTITUDE_RANGE),
     "ground_range": Spec("m", "ground range from sensor nadir to target", *GROUND_RANGE_RANGE),
-    "visibility": Spec("km", "meteorological visibility (MODTRAN rural aerosol)", 5.0, 23.0),
+    "visibility": Spec("km", "meteorological visibility (MODTRAN rural aerosol)",
+                       min(VISIBILITIES), max(VISIBILITIES)),
     "platform_speed": Spec("m s-1", "platform ground speed", **NONNEGATIVE),
     "target_reflectance": Spec("1", "target reflectance", **FRACTION),
     "target_temperature": Spec("K", "target temperature", **POSITIVE),

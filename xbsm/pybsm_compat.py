@@ -18,6 +18,7 @@ import numpy as np
 import xarray as xr
 
 from . import params
+from .atmosphere.database import IHAZE, VISIBILITIES
 
 SENSOR_NAMES: dict[str, str] = {
     "D": "aperture_diameter",
@@ -78,7 +79,7 @@ SCENARIO_NAMES: dict[str, str] = {
 }
 """pyBSM Scenario keyword -> xbsm.scenario parameter."""
 
-IHAZE_VISIBILITY = {1: 23.0, 2: 5.0}
+IHAZE_VISIBILITY = dict(zip(IHAZE, VISIBILITIES, strict=True))
 """MODTRAN IHAZE code -> visibility. [km]"""
 
 

@@ -1,0 +1,275 @@
+"""The atmosphere database file, its facts, and the cube in memory.
+
+The database (pyBSM 0.16.1's 3430 MODTRAN 5.2.1 runs, see ``NOTICE``) is one NetCDF
+file, ``atmosphere.nc``, with a float32 variable ``atmosphere`` on the dims
+(visibility, altitude, ground_range, component, wavelength) in the database's native
+units. This module is the one place that knows the file: where it is
+(:func:`database_path`), its facts (the nodes of each coordinate, the limits that
+follow from them, the components and their units), how to open it lazily in SI
+units (:func:`open_atmosphere`) and how to read it into memory once per process
+(:func:`load_database`). ``params``, ``examples`` and the flag texts take the facts
+from here; ``tests/test_atmosphere.py`` checks them against the file.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+
+import netCDF4
+import numpy as np
+import xarray as xr
+
+__all__ = [
+    "ALTITUDES",
+    "ALTITUDE_GAP",
+    "ALTITUDE_RANGE",
+    "COMPONENTS",
+    "GROUND_RANGES",
+    "GROUND_RANGE_RANGE",
+    "IHAZE",
+    "LONG_NAMES",
+    "UNITS",
+    "VARIABLES",
+    "VISIBILITIES",
+    "WAVELENGTH_MAX",
+    "WAVELENGTH_MIN",
+    "Database",
+    "database_path",
+    "database_wavelengths",
+    "load_database",
+    "open_atmosphere",
+]
+
+# ---- the facts (pyBSM 0.16.1's database, paper Appendix A; tests check them against the file)
+
+#: MODTRAN tape 7 columns, in database order.
+COMPONENTS = ("TRANS", "PTH_THRML", "SURF_EMIS", "SOL_SCAT", "GRND_RFLT")
+#: Names of the variables returned by :func:`xbsm.atmosphere.atmosphere_at`, one per component.
+VARIABLES = (
+    "transmission",
+    "path_thermal",
+    "surface_emission",
+    "solar_scatter",
+    "ground_reflected",
+)
+#: ``long_name`` of each of :data:`VARIABLES`.
+LONG_NAMES = (
+    "atmospheric transmittance along the path",
+    "path thermal radiance (atmospheric emission and scattering)",
+    "surface emission radiance at the sensor (target at 299 K, reflectance 0.15)",
+    "path solar scattered radiance",
+    "ground reflected solar radiance at the sensor (reflectance 0.15)",
+)
+#: SI ``units`` of each of :data:`VARIABLES`.
+UNITS = ("1", "W m-2 sr-1 m-1", "W m-2 sr-1 m-1", "W m-2 sr-1 m-1", "W m-2 sr-1 m-1")
+#: Visibilities of the database, in its order (MODTRAN IHAZE 1 and 2). [km]
+VISIBILITIES = (23.0, 5.0)
+#: MODTRAN IHAZE code of each of :data:`VISIBILITIES` (the file's ``ihaze`` coordinate).
+IHAZE = (1, 2)
+#: Sensor altitudes of the database's tables. [m]
+ALTITUDES = (2.0, 32.5, 75.0, 150.0, 225.0, 500.0, *np.arange(1000.0, 12001.0, 1000.0).tolist(),
+             14000.0, 16000.0, 18000.0, 20000.0, 24500.0, 550000.0)
+#: Ground ranges of the database's tables. [m]
+GROUND_RANGES = (0.0, 100.0, 500.0, *np.arange(1000.0, 20001.0, 1000.0).tolist(),
+                 *np.arange(22000.0, 80001.0, 2000.0).tolist(),
+                 *np.arange(85000.0, 300001.0, 5000.0).tolist())
+#: Sensor altitudes covered by the database. [m]
+ALTITUDE_RANGE = (ALTITUDES[0], ALTITUDES[-1])
+#: Ground ranges covered by the database. [m]
+GROUND_RANGE_RANGE = (GROUND_RANGES[0], GROUND_RANGES[-1])
+#: The altitudes with no table in between (24.5 km and 550 km): above the first, only ground
+#: range 0 is interpolated, and the line-of-sight rules fall back to fixed ground range. [m]
+ALTITUDE_GAP = (ALTITUDES[-2], ALTITUDES[-1])
+#: Shortest wavelength of the database. [m]
+WAVELENGTH_MIN = 0.3e-6
+#: Longest wavelength of the database. [m]
+WAVELENGTH_MAX = 14.0e-6
+
+#: pyBSM's conversion W/(sr cm^2 um) -> W/(m^2 sr m): the float32 value divided by
+#: float32(1e-10) in float32 (NumPy 2 keeps float32 for float32 / Python float).
+_DIVISOR = np.array([1.0, 1e-10, 1e-10, 1e-10, 1e-10], dtype=np.float32)
+_DIVISOR.flags.writeable = False
+_FILE_CHUNKS = MappingProxyType({})  # xarray: use the file's chunks
+
+
+def database_path(path=None) -> Path:
+    """Path of the atmosphere database file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        Explicit file. Default: ``xbsm/data/atmosphere.nc`` (installed wheel),
+        else ``atmosphere.nc`` at the top of a source checkout.
+
+    Returns
+    -------
+    pathlib.Path
+        Resolved path of an existing file.
+    """
+    if path is None:
+        return _default_database()
+    return _existing([Path(path)])
+
+
+@functools.cache
+def _default_database() -> Path:
+    """The packaged database, found once per process."""
+    package = Path(__file__).resolve().parent.parent
+    return _existing([package / "data" / "atmosphere.nc", package.parent / "atmosphere.nc"])
+
+
+def _existing(candidates) -> Path:
+    """The first existing file of ``candidates``, resolved."""
+    for candidate in candidates:
+        if candidate.is_file():
+            return candidate.resolve()
+    raise FileNotFoundError(
+        "atmosphere database not found; looked for "
+        + ", ".join(str(c) for c in candidates)
+        + " (build it with recipes/build_atmosphere.py)"
+    )
+
+
+def open_atmosphere(path=None, chunks=_FILE_CHUNKS) -> xr.Dataset:
+    """MODTRAN 5.2.1 atmosphere database in SI units, opened lazily.
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        Database file; see :func:`database_path`.
+    chunks : dict, str, int or None
+        Passed to :func:`xarray.open_dataset`. Default: the file's chunks, one
+        dask chunk per (visibility, altitude). ``None`` loads numpy arrays.
+
+    Returns
+    -------
+    xr.Dataset
+        Variable ``atmosphere`` (float32) on (visibility, altitude, ground_range,
+        component, wavelength); per-component units in the coordinate
+        ``component_units``: transmittance [1], radiances [W m-2 sr-1 m-1].
+        NaN where the database has no entry.
+
+    Notes
+    -----
+    Radiances are converted exactly as pyBSM 0.16.1 does, ``raw / float32(1e-10)``
+    in float32, so the numbers are bit-identical to pyBSM's. Transmittance is the
+    stored value.
+    """
+    file = str(database_path(path))
+    _read(file)  # a clear error for a file that is not the database
+    if isinstance(chunks, MappingProxyType):
+        with netCDF4.Dataset(file) as nc:
+            chunks = dict(zip(nc["atmosphere"].dimensions, nc["atmosphere"].chunking(),
+                              strict=True))
+    # open without dask, load the small coordinates, then chunk only the cube, so
+    # that reading coordinates never needs a dask compute
+    ds = xr.open_dataset(file, engine="netcdf4", chunks=None)
+    ds = ds.assign_coords({name: ds[name].load() for name in ds.coords})
+    try:
+        raw = ds["atmosphere"] if chunks is None else ds["atmosphere"].chunk(chunks)
+    except (TypeError, ValueError) as err:
+        raise ValueError(
+            "chunks must be None, 'auto', a byte size such as '64MB', an int (the chunk size "
+            "along every dimension) or a dict from dimension names (visibility, altitude, "
+            f"ground_range, component, wavelength) to chunk sizes; got {chunks!r}") from err
+    divisor = xr.DataArray(_DIVISOR, dims="component")
+    si = (raw / divisor).astype(np.float32)
+    si.attrs = {
+        "long_name": "MODTRAN 5.2.1 path transmittance and radiance components",
+        "comment": "units by component in component_units; radiances are the database's "
+                   "W sr-1 cm-2 um-1 divided by float32(1e-10) in float32 (pyBSM's rule); "
+                   "NaN where the database has no entry",
+    }
+    ds = ds.assign(atmosphere=si)
+    return ds.assign_coords(
+        component_units=("component", np.array(UNITS, dtype=object),
+                         ds["component_units"].attrs),
+    )
+
+
+@dataclass(frozen=True, eq=False)  # compared and hashed by identity (a cache key)
+class Database:
+    """The whole database as numpy arrays (SI, float32), as :func:`load_database` reads it.
+
+    A copy with tables left out (``dataclasses.replace`` with a subset of ``altitude``
+    and the matching slices of ``cube`` and ``present``) is a database too: the
+    leave-one-out recipe interpolates such copies with
+    :func:`xbsm.atmosphere.interpolate_database`.
+    """
+
+    visibility: np.ndarray  # [km]
+    altitude: np.ndarray  # [m]
+    ground_range: np.ndarray  # [m]
+    wavelength: np.ndarray  # [m]
+    cube: np.ndarray  # (visibility, altitude, ground_range, component, wavelength)
+    present: np.ndarray  # (visibility, altitude, ground_range) bool
+
+
+def load_database(path=None) -> Database:
+    """The database in memory, read once per process (netCDF4, no dask).
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        Database file (default: the packaged one, found once); see :func:`database_path`.
+
+    Returns
+    -------
+    Database
+        Coordinates (float64) and the cube in SI units (float32, read-only), converted as
+        :func:`open_atmosphere` converts it; ``present`` where a table has an entry.
+
+    Raises
+    ------
+    ValueError
+        A file that is not a readable xbsm atmosphere database.
+    """
+    return _read(str(database_path(path)))
+
+
+@functools.lru_cache(maxsize=4)
+def _read(path: str) -> Database:
+    """Read the database file ``path`` into memory (once per process and path)."""
+    try:
+        with netCDF4.Dataset(path) as nc:
+            nc.set_auto_maskandscale(False)
+            cube = nc["atmosphere"][...]
+            coords = {name: np.asarray(nc[name][...], dtype=np.float64)
+                      for name in ("visibility", "altitude", "ground_range", "wavelength")}
+    except OSError as err:
+        raise ValueError(f"path {path!r} is not an xbsm atmosphere database: it cannot be "
+                         "read as a NetCDF file (the database is the NetCDF file "
+                         "recipes/build_atmosphere.py writes)") from err
+    except RuntimeError as err:  # HDF5's own checks failed: a truncated or bit-flipped file
+        raise ValueError(f"atmosphere database {path} is damaged (NetCDF/HDF error: {err}): "
+                         "reinstall xbsm or rebuild it with recipes/build_atmosphere.py") from None
+    except (KeyError, IndexError) as err:
+        raise ValueError(f"path {path!r} is not an xbsm atmosphere database: it lacks the "
+                         "variable 'atmosphere' or its coordinates (visibility, altitude, "
+                         "ground_range, wavelength) that recipes/build_atmosphere.py "
+                         "writes") from err
+    cube = np.ascontiguousarray(cube, dtype=np.float32)
+    cube /= _DIVISOR[:, None]  # float32 / float32: pyBSM's bits; NaN stays NaN
+    present = ~np.isnan(cube[:, :, :, 0, 0])
+    cube.setflags(write=False)
+    present.setflags(write=False)
+    return Database(cube=cube, present=present, **coords)
+
+
+def database_wavelengths(path=None) -> np.ndarray:
+    """Wavelength samples of the atmosphere database, 0.3-14 um every 10 nm [m].
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        Database file; see :func:`database_path`.
+
+    Returns
+    -------
+    numpy.ndarray
+        The ``wavelength`` coordinate (read once per process with the database). [m]
+    """
+    return load_database(path).wavelength
