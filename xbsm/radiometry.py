@@ -187,7 +187,7 @@ def _interp_kernel(curve, target, *, source):
 
 # ---- the xarray boundary ------------------------------------------------------------
 
-def _apply(kernel, args, *, wavelength=None, curves=(), spectral=(True,), **knobs):
+def _apply(kernel, args, *, wavelength=None, spectral=(True,), **knobs):
     """Run a numpy kernel once over its arguments, broadcast and labelled as xarray would.
 
     Parameters
@@ -215,38 +215,29 @@ def _apply(kernel, args, *, wavelength=None, curves=(), spectral=(True,), **knob
         With the attributes of the first argument (callers name their results); inputs
         backed by dask give lazy dask results.
     """
-    curve_dims = {i: f"{name}_wavelength" for i, name in curves
-                  if f"{name}_wavelength" in getattr(args[i], "dims", ())}
-    core = [[curve_dims[i]] if i in curve_dims
-            else ["wavelength"] if "wavelength" in getattr(a, "dims", ()) else []
-            for i, a in enumerate(args)]
+    core = [["wavelength"] if "wavelength" in getattr(a, "dims", ()) else [] for a in args]
     if wavelength is None or not any(core):
         return apply_kernel(kernel, *args, outputs=[()] * len(spectral), **knobs)
-    sources = {i: args[i][dim].values for i, dim in curve_dims.items()}
 
     def over_wavelength(*arrays):
-        *arrays, target = arrays
-        return kernel(*(_interp_kernel(a, target, source=sources[i]) if i in sources
-                        else a if core[i] else np.asarray(a)[..., np.newaxis]
+        *arrays, _ = arrays
+        return kernel(*(a if core[i] else np.asarray(a)[..., np.newaxis]
                         for i, a in enumerate(arrays)), **knobs)
 
     out = apply_kernel(over_wavelength, *args, wavelength, core=[*core, ["wavelength"]],
                        outputs=[("wavelength",) if s else () for s in spectral])
-    order = _dimension_order(args, curve_dims)
+    order = _dimension_order(args)
     outs = tuple(o.transpose(*order) if s and o.dims != order else o
                  for o, s in zip(out if isinstance(out, tuple) else (out,), spectral,
                                  strict=True))
     return outs if len(outs) > 1 else outs[0]
 
 
-def _dimension_order(args, curve_dims):
-    """Dimensions in order of first appearance, a resampled curve's ``wavelength`` last."""
+def _dimension_order(args):
+    """Dimensions in order of first appearance, ``wavelength`` last if no argument has it."""
     order = {}
-    for i, a in enumerate(args):
-        dims = getattr(a, "dims", ())
-        if i in curve_dims:
-            dims = (*(d for d in dims if d != curve_dims[i]), "wavelength")
-        order.update(dict.fromkeys(dims))
+    for a in args:
+        order.update(dict.fromkeys(getattr(a, "dims", ())))
     order.setdefault("wavelength")
     return tuple(order)
 
@@ -685,17 +676,18 @@ def sensor_band_terms(sensor: xr.Dataset, wavelength: xr.DataArray,
         shield, optics and cold stop, plus stray light) [W m-2 m-1] (paper Eq. 2).
     """
     s = sensor
+    curves = {name: resample_spectral(s[name], wavelength, name)  # once each, here
+              for name in ("optics_transmission", "quantum_efficiency", "stray_irradiance")}
     optics = _apply(_optics_transmission_kernel, (
-        s["cold_filter_transmission"], s["obscuration_ratio"], s["optics_transmission"]),
-        wavelength=wavelength, curves=[(2, "optics_transmission")])
+        s["cold_filter_transmission"], s["obscuration_ratio"], curves["optics_transmission"]),
+        wavelength=wavelength)
     sensor_irradiance = _apply(_sensor_irradiance_kernel, (
         s["focal_length"], s["aperture_diameter"], wavelength, s["cold_shield_temperature"],
         s["cold_filter_transmission"], s["optics_emissivity"], s["optics_temperature"],
-        s["cold_filter_emissivity"], s["cold_filter_temperature"], s["stray_irradiance"]),
-        wavelength=wavelength, curves=[(9, "stray_irradiance")], **_planck_knobs(constants))
+        s["cold_filter_emissivity"], s["cold_filter_temperature"], curves["stray_irradiance"]),
+        wavelength=wavelength, **_planck_knobs(constants))
     values = {"optics_transmission": optics,
-              "quantum_efficiency": resample_spectral(s["quantum_efficiency"], wavelength,
-                                                      "quantum_efficiency"),
+              "quantum_efficiency": curves["quantum_efficiency"],
               "sensor_irradiance": sensor_irradiance}
     return dataset({name: declared(values[name], o) for name, o in BAND_OUTPUTS.items()})
 
