@@ -384,12 +384,14 @@ def _dims_in_order(*dims):
     return tuple(dict.fromkeys(d for group in dims for d in group))
 
 
-def _version_tests(calibration, values, version=0, niirs_column=None):
+def _version_tests(calibration, values, version=0, niirs_column=None, q_per_orientation=None):
     """The arrays one GIQE version's flags test, and the tests, in :func:`giqe_flags`'s order.
 
     ``values`` maps snr, rer, gsd, gsd_ground_plane, elevation, q and niirs to DataArrays
-    (or None: not tested). Returns (arrays, tests) with tests as :func:`_flags_kernel`
-    takes them, the array index standing for an entry of ``arrays``.
+    (or None: not tested). ``q`` is tested over its orientations (any outside) when it has
+    an ``orientation`` dim, or when ``q_per_orientation`` says so for a plain array.
+    Returns (arrays, tests) with tests as :func:`_flags_kernel` takes them, the array
+    index standing for an entry of ``arrays``.
     """
     checks = [("snr_nonpositive", "snr", "nonpositive", (0.0, 0.0)),
               ("rer_nonpositive", "rer", "not_positive", (0.0, 0.0))]
@@ -399,7 +401,9 @@ def _version_tests(calibration, values, version=0, niirs_column=None):
                       ("niirs_out_of_scale", "niirs")):
         lo_hi = getattr(calibration, key)
         if values.get(key) is not None and lo_hi is not None:
-            kind = "any_outside" if key == "q" and "orientation" in values[key].dims else "outside"
+            per_orientation = (q_per_orientation if q_per_orientation is not None
+                               else "orientation" in getattr(values[key], "dims", ()))
+            kind = "any_outside" if key == "q" and per_orientation else "outside"
             checks.append((name, key, kind, lo_hi))
     arrays, tests = [], []
     for name, key, kind, (lo, hi) in checks:
@@ -804,20 +808,19 @@ def giqe_arrays(*, rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_g
                                      rer_x, rer_y, noise_coefficient=noise_coefficient)
     gsd5_gp = (None if calibration[5].gsd_ground_plane is None
                else _ground_plane_kernel(gsd_x, elevation, power=0.5))
-    q = xr.Variable("orientation", q)  # its test runs over orientation
     tested = (
         {"snr": snr, "rer": rer, "gsd": gsd, "elevation": elevation, "niirs": niirs},
         {"snr": snr, "rer": rer, "gsd": gsd_gp, "elevation": elevation, "niirs": niirs},
         {"snr": snr, "rer": rer5, "gsd": gsd_w, "gsd_ground_plane": gsd5_gp,
          "elevation": elevation, "q": q, "niirs": niirs})
-    arrays, tests, _ = _tests_by_version(calibration, tested)
-    flags = _flags_kernel(*(np.asarray(getattr(a, "values", a)) for a in arrays),
+    arrays, tests, _ = _tests_by_version(calibration, tested, q_per_orientation=True)
+    flags = _flags_kernel(*(np.asarray(a) for a in arrays),
                           tests=tests, versions=len(GIQE_VERSIONS))
     return {"niirs": niirs, "flags": flags, "rer_giqe5": rer5, "gsd": gsd, "gsd_gp": gsd_gp,
             "gsd_w": gsd_w, "noise_gain": noise_gain}
 
 
-def _tests_by_version(calibration, tested):
+def _tests_by_version(calibration, tested, q_per_orientation=None):
     """Every GIQE version's tested arrays and tests, numbered for one :func:`_flags_kernel`.
 
     ``tested[i]`` holds what version ``GIQE_VERSIONS[i]`` tests (its NIIRS being column i
@@ -825,7 +828,8 @@ def _tests_by_version(calibration, tested):
     """
     arrays, tests, versions = [], [], []
     for i, (version, values) in enumerate(zip(GIQE_VERSIONS, tested, strict=True)):
-        version_arrays, version_tests = _version_tests(calibration[version], values, i, i)
+        version_arrays, version_tests = _version_tests(calibration[version], values, i, i,
+                                                       q_per_orientation)
         tests += [(*t[:5], t[5] + len(arrays), t[6]) for t in version_tests]
         arrays += version_arrays
         versions += [i] * len(version_arrays)
