@@ -266,9 +266,9 @@ OTHER_ROWS = [
      "got an xr.DataArray of dtype <U1 on dims ('f',)"),
     # issue 20, the review's new input classes
     ("simulate_reflectance_range_none", _simulated(reflectance_range=None), ValueError,
-     "reflectance_range must be a pair (low, high) with 0 <= low < high <= 1; got None"),
+     "reflectance_range must be a (low, high) pair in [0, 1] 1 with low < high; got None"),
     ("simulate_reflectance_range_one_value", _simulated(reflectance_range=(0.5,)), ValueError,
-     "reflectance_range must be a pair (low, high) with 0 <= low < high <= 1; got (0.5,)"),
+     "reflectance_range must be a (low, high) pair in [0, 1] 1 with low < high; got (0.5,)"),
     ("simulate_empty_image", _simulated(np.zeros((0, 0))), ValueError,
      "image must have at least one pixel along 'y' and 'x'; got 0 x 0"),
     ("simulate_image_without_rows", _simulated(np.zeros((0, 48))), ValueError,

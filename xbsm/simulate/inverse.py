@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._metadata import named
+from .._metadata import Output, named
+from ..params import Choice, Pair, Spec, contract
 
 __all__ = ["photoelectrons_to_reflectance", "photoelectrons_to_pixels", "wiener_filter",
            "stretch_contrast_8bit"]
@@ -61,6 +62,9 @@ def _minmax_kernel(img, low, high):
     return np.where(np.isfinite(img), out, np.nan)
 
 
+@contract(Output("pixels", "1", "display pixel value"),
+          mode=Choice(("radiometric", "minmax")), pixel_range=Pair(Spec("1", "pixel value")),
+          reflectance_range=Pair(Spec("1", "reflectance")))
 def photoelectrons_to_pixels(photoelectrons: xr.DataArray, simulation: xr.Dataset | None = None,
                              *, mode="radiometric", pixel_range=(0.0, 255.0),
                              reflectance_range=(0.05, 0.95), dims=("y", "x")) -> xr.DataArray:
@@ -89,9 +93,7 @@ def photoelectrons_to_pixels(photoelectrons: xr.DataArray, simulation: xr.Datase
     xr.DataArray
         Pixel values clipped to ``pixel_range``; NaN stays NaN. [1]
     """
-    low, high = (float(v) for v in pixel_range)
-    if not low < high:
-        raise ValueError(f"pixel_range must be increasing; got {pixel_range!r}")
+    low, high = pixel_range
     if mode == "minmax":
         out = xr.apply_ufunc(_minmax_kernel, photoelectrons, kwargs={"low": low, "high": high},
                              input_core_dims=[list(dims)], output_core_dims=[list(dims)],
@@ -99,14 +101,10 @@ def photoelectrons_to_pixels(photoelectrons: xr.DataArray, simulation: xr.Datase
     elif mode == "radiometric":
         if simulation is None:
             raise ValueError("mode='radiometric' needs the simulation (its radiometry)")
-        r1, r2 = (float(v) for v in reflectance_range)
-        if not r1 < r2:
-            raise ValueError(f"reflectance_range must be increasing; got {reflectance_range!r}")
+        r1, r2 = reflectance_range
         refl = photoelectrons_to_reflectance(photoelectrons, simulation)
         out = ((refl - r1) / (r2 - r1) * (high - low) + low).clip(low, high)
-    else:
-        raise ValueError(f"mode must be 'radiometric' or 'minmax'; got {mode!r}")
-    return named(out, "1", "display pixel value")
+    return out
 
 
 def wiener_filter(otf, noise_to_signal, *, normalize=True):

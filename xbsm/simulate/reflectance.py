@@ -16,6 +16,7 @@ import xarray as xr
 
 from .. import flags as fl
 from .._metadata import named
+from ..params import FRACTION, Pair, Spec, contract
 from .options import IMAGE_KNOBS
 
 __all__ = ["image_to_reflectance"]
@@ -118,18 +119,6 @@ def _check_table(table):
     return pixels, reflectances
 
 
-def _check_range(reflectance_range):
-    message = ("reflectance_range must be a pair (low, high) with 0 <= low < high <= 1; "
-               f"got {reflectance_range!r}")
-    try:
-        low, high = (float(v) for v in reflectance_range)
-    except (TypeError, ValueError):  # None, one value, three, not numbers
-        raise ValueError(message) from None
-    if not (0.0 <= low < high <= 1.0):
-        raise ValueError(message)
-    return low, high
-
-
 def _kernel_for(mapping, reflectance_range):
     """The per-image numpy kernel and its keyword arguments for a mapping choice."""
     if isinstance(mapping, str):
@@ -138,7 +127,7 @@ def _kernel_for(mapping, reflectance_range):
                              f"(pixel_values, reflectance_values); got {mapping!r}")
         if mapping == "identity":
             return _identity_kernel, {}
-        low, high = _check_range(reflectance_range)
+        low, high = reflectance_range
         return _stretch_kernel, dict(mode=mapping, low=low, high=high)
     pixels, reflectances = _check_table(mapping)
     if pixels.size == 2:  # pyBSM's two-point form, same arithmetic as the stretches
@@ -147,6 +136,7 @@ def _kernel_for(mapping, reflectance_range):
     return _table_kernel, dict(pixels=pixels, reflectances=reflectances)
 
 
+@contract(reflectance_range=Pair(Spec("1", "reflectance", **FRACTION)))
 def image_to_reflectance(image: xr.DataArray, reflectance="percentile",
                          reflectance_range=(0.05, 0.95), *, dims=("y", "x")) -> xr.Dataset:
     """Scene reflectance of each image of a stack, clipped to [0, 1].
