@@ -22,6 +22,7 @@ from xbsm import flags as _flags
 
 from .._kernels import apply_kernel, dataset
 from .._metadata import Output, declared, named, outputs
+from ..params import Instance, Pair, Spec, contract
 
 __all__ = [
     "GIQE_VERSIONS",
@@ -111,47 +112,35 @@ class GiqeCalibration:
     q: tuple | None = None
 
     def __post_init__(self):
-        for name in _RANGE_FIELDS:
-            object.__setattr__(self, name, _check_range(name, getattr(self, name)))
+        for name, rule in RANGE_RULES.items():
+            object.__setattr__(self, name, rule.check(name, getattr(self, name)))
         if not isinstance(self.source, str):
             raise ValueError(f"source must be a str; got {type(self.source).__name__}")
 
     def replace(self, **changes) -> GiqeCalibration:
         """A copy with some ranges changed (validated like the constructor)."""
-        unknown = sorted(set(changes) - set(_RANGE_FIELDS) - {"source"})
+        unknown = sorted(set(changes) - set(RANGE_RULES) - {"source"})
         if unknown:
             raise ValueError(
                 f"unknown GiqeCalibration field(s) {unknown}; fields are "
-                f"{', '.join(_RANGE_FIELDS)}, source"
+                f"{', '.join(RANGE_RULES)}, source"
             )
         return dataclasses.replace(self, **changes)
 
 
-_RANGE_FIELDS = ("snr", "rer", "gsd", "elevation", "niirs", "gsd_ground_plane", "q")
-_RANGE_UNITS = MappingProxyType({"snr": "[1]", "rer": "[1]", "gsd": "[m]", "elevation": "[rad]",
-                                 "niirs": "[1]", "gsd_ground_plane": "[m]", "q": "[1]"})
-
-
-def _check_range(name, value):
-    """Validate one calibration range; return it as a pair of floats (or None)."""
-    if value is None:
-        return None
-    form = (f"{name} must be None or a (low, high) pair of numbers {_RANGE_UNITS[name]} "
-            f"with low <= high")
-    try:
-        lo, hi = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{form}; got {value!r}") from None
-    if np.isnan(lo) or np.isnan(hi) or lo > hi:
-        raise ValueError(f"{form}; got {value!r}")
-    if name == "elevation" and not (0.0 <= lo and hi <= np.pi / 2 + 1e-12):
-        raise ValueError(
-            f"elevation must be a (low, high) pair in radians within [0, pi/2], e.g. "
-            f"(np.deg2rad(25), np.pi / 2); got {value!r}"
-        )
-    if name in ("snr", "rer", "gsd", "gsd_ground_plane", "q") and lo < 0:
-        raise ValueError(f"{form} and low >= 0; got {value!r}")
-    return (lo, hi)
+#: The declared rule of each calibration range (params words): None, or a (low, high) pair
+#: with low <= high inside the quantity's own interval (the elevation in radians, up to
+#: pi/2 and its rounding).
+RANGE_RULES = MappingProxyType({
+    name: Pair(spec, equal=True, optional=True) for name, spec in {
+        "snr": Spec("1", "contrast SNR", low=0.0),
+        "rer": Spec("1", "relative edge response", low=0.0),
+        "gsd": Spec("m", "ground sample distance", low=0.0),
+        "elevation": Spec("rad", "elevation angle", 0.0, np.pi / 2 + 1e-12),
+        "niirs": Spec("1", "NIIRS"),
+        "gsd_ground_plane": Spec("m", "ground-plane GSD", low=0.0),
+        "q": Spec("1", "sampling ratio Q", low=0.0),
+    }.items()})
 
 
 # Each limit below has its source on the line before it. "Unverified" means
@@ -253,13 +242,8 @@ def giqe_calibrations(calibration=None):
     return MappingProxyType(out)
 
 
-def _check_calibration(calibration):
-    if not isinstance(calibration, GiqeCalibration):
-        raise ValueError(
-            "calibration must be an xbsm.metrics.GiqeCalibration (e.g. "
-            f"GIQE5_CALIBRATION.replace(...)); got {type(calibration).__name__}"
-        )
-    return calibration
+_CALIBRATION = Instance(GiqeCalibration, "an xbsm.metrics.GiqeCalibration (e.g. "
+                        "GIQE5_CALIBRATION.replace(...))")
 
 
 # ---------------------------------------------------------------------------- kernels
@@ -459,6 +443,7 @@ def sampling_q(wavelength, aperture_diameter, ifov):
     return named(q, "1", "sampling ratio Q = lambda N / p")
 
 
+@contract(calibration=_CALIBRATION)
 def giqe_flags(*, snr, rer, gsd, elevation=None, niirs=None, calibration=GIQE4_CALIBRATION,
                gsd_ground_plane=None, q=None):
     """Flag GIQE inputs and predictions outside a calibration.
@@ -495,13 +480,13 @@ def giqe_flags(*, snr, rer, gsd, elevation=None, niirs=None, calibration=GIQE4_C
         range that is ``None`` in ``calibration``, or whose quantity is not
         given, is not tested.
     """
-    cal = _check_calibration(calibration)
     values = {"snr": snr, "rer": rer, "gsd": gsd, "gsd_ground_plane": gsd_ground_plane,
               "elevation": elevation, "q": q, "niirs": niirs}
     values = {key: None if value is None else _da(value) for key, value in values.items()}
-    return _label_flags(*_version_tests(cal, values))
+    return _label_flags(*_version_tests(calibration, values))
 
 
+@contract(calibration=_CALIBRATION)
 def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
           elevation=None):
     r"""NIIRS from the General Image Quality Equation version 3.
@@ -538,7 +523,6 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
 
         NIIRS = 11.81 + 3.32\log_{10}\frac{RER}{GSD} - 1.48\,EHO - \frac{G}{SNR}
     """
-    _check_calibration(calibration)
     rer, gsd, eho, snr, noise_gain = map(_da, (rer, gsd, eho, snr, noise_gain))
     niirs = named(apply_kernel(_giqe3_kernel, rer, gsd, eho, noise_gain, snr), "1",
                   "NIIRS (GIQE 3)", references=GIQE_REFERENCES[3])
@@ -547,6 +531,7 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
     return dataset({"niirs": niirs, "flags": _label_flags(*_version_tests(calibration, values))})
 
 
+@contract(calibration=_CALIBRATION)
 def giqe4(
     *,
     rer,
@@ -601,7 +586,6 @@ def giqe4(
     with (a, b) = (3.32, 1.559) for RER >= 0.9 and (3.16, 2.817) otherwise
     (a 0.11 NIIRS step at RER = 0.9 is part of the published fit).
     """
-    _check_calibration(calibration)
     rer, gsd, eho, snr, elevation, noise_gain = map(
         _da, (rer, gsd, eho, snr, elevation, noise_gain)
     )
@@ -639,6 +623,7 @@ def giqe5_rer(rer_x, rer_y):
                  references=_RER5_REFERENCE)
 
 
+@contract(calibration=_CALIBRATION)
 def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q=None):
     r"""NIIRS from the NGA General Image Quality Equation version 5.
 
@@ -679,7 +664,6 @@ def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q
                 + 3.32\,(1 - e^{-1.9/SNR})\log_{10}RER
                 - 2\,(\log_{10}RER)^4 - 1.8/SNR
     """
-    _check_calibration(calibration)
     rer_x, rer_y, gsd, snr, elevation = map(_da, (rer_x, rer_y, gsd, snr, elevation))
     rer = giqe5_rer(rer_x, rer_y)
     gsd_w = named(apply_kernel(_ground_plane_kernel, gsd, elevation, power=0.25), "m",
