@@ -114,7 +114,7 @@ ERROR_ROWS = [
             [0.0, 1e4], dims="case", coords={"case": [5, 6]})})),
      ValueError, "different coordinate values"),
     ("targets_unknown", lambda: xbsm.snr(S, SC, targets="tank"), ValueError,
-     "targets must be 'giqe' or 'scenario'"),
+     "targets must be one of 'giqe', 'scenario'"),
     ("absurd_grid", lambda: xbsm.niirs(xbsm.sensor(**{**SENSOR, "pixel_pitch_x": 1.0}), SC),
      ValueError, "max_frequency_nodes"),
     ("otf_frequency_nan", lambda: xbsm.system_otf(S, SC, [0.0, np.nan]), ValueError,

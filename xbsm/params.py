@@ -187,6 +187,20 @@ class Instance:
 
 
 @dataclass(frozen=True)
+class Resolved:
+    """An argument a function of the package resolves: a preset name or the object itself.
+
+    ``resolve(value)`` checks it, raising the error that names the argument.
+    """
+
+    resolve: object  # callable
+
+    def check(self, name: str, value):
+        """What ``value`` resolves to."""
+        return self.resolve(value)
+
+
+@dataclass(frozen=True)
 class Contract:
     """What a public function checks on its arguments and declares of its result."""
 
@@ -201,7 +215,7 @@ def contract(returns=None, **rules):
     ----------
     returns : xbsm._metadata.Output, optional
         Units and long name of a DataArray result (set on every call).
-    **rules : Spec, Choice, Selection, Pair or Instance
+    **rules : Spec, Choice, Selection, Pair, Instance or Resolved
         One per checked argument, by name; the function receives what the rule returns
         (a Selection's tuple, a Pair's floats). Defaults are checked too.
 
