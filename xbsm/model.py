@@ -13,9 +13,8 @@ import xarray as xr
 from . import _chain, metrics
 from .methods import method as resolve_method
 from .params import Choice, Resolved, check_inputs, contract
+from .radiometry import TARGETS
 
-#: What :func:`snr` computes the signal of: the GIQE standard target or the scenario's own.
-TARGETS = ("giqe", "scenario")
 _METHOD = Resolved(resolve_method)
 
 
