@@ -234,3 +234,15 @@ def test_instance_names_the_type_it_got():
     rule = params.Instance(dict, "a mapping (e.g. {})")
     with pytest.raises(ValueError, match=r"^table must be a mapping \(e.g. \{\}\); got list$"):
         rule.check("table", [])
+
+
+def test_values_rule_checks_every_value_of_an_array_argument():
+    rule = params.Values(params.Spec("m", "slant range", **params.POSITIVE))
+    ok = xr.DataArray([1.0, 2.0], dims="r")
+    assert rule.check("slant_range", ok) is ok
+    with pytest.raises(ValueError, match=r"^slant_range must lie in \(0, inf\) m; got -1.0$"):
+        rule.check("slant_range", np.array([1.0, -1.0]))
+    with pytest.raises(ValueError, match="slant_range must lie in"):
+        rule.check("slant_range", np.nan)
+    lazy = xr.DataArray(dsa.from_array(np.array([-1.0])), dims="r")
+    assert rule.check("slant_range", lazy) is lazy  # dask values are not computed here

@@ -112,6 +112,26 @@ FRACTION = {"low": 0.0, "high": 1.0}
 
 
 @dataclass(frozen=True)
+class Values:
+    """A physical argument (a float, an array or an eager DataArray) inside ``spec``'s interval.
+
+    NaN counts as outside; dask-backed values are not computed to be checked.
+    """
+
+    spec: Spec
+
+    def check(self, name: str, value):
+        """``value`` unchanged if every one of its values lies in the interval."""
+        if getattr(getattr(value, "data", None), "chunks", None) is not None:
+            return value
+        values = np.asarray(value, dtype=float)
+        mask = self.spec.violated(values)
+        if np.any(mask):
+            _raise(name, self.spec, values[mask].ravel()[0] if values.ndim else values)
+        return value
+
+
+@dataclass(frozen=True)
 class Choice:
     """A knob that takes one of ``choices`` (strings, or None where None means "none")."""
 
@@ -215,7 +235,7 @@ def contract(returns=None, **rules):
     ----------
     returns : xbsm._metadata.Output, optional
         Units and long name of a DataArray result (set on every call).
-    **rules : Spec, Choice, Selection, Pair, Instance or Resolved
+    **rules : Spec, Values, Choice, Selection, Pair, Instance or Resolved
         One per checked argument, by name; the function receives what the rule returns
         (a Selection's tuple, a Pair's floats). Defaults are checked too.
 

@@ -416,6 +416,7 @@ def _label_flags(arrays, tests, versions=None, long_name="GIQE validity flags"):
     return out
 
 
+@contract(Output("q", "1", "sampling ratio Q = lambda N / p"))
 def sampling_q(wavelength, aperture_diameter, ifov):
     r"""Sampling ratio Q of an optics and detector: wavelength x f-number / pixel pitch.
 
@@ -439,8 +440,7 @@ def sampling_q(wavelength, aperture_diameter, ifov):
 
     NGA GIQE 5 report (2015), which assumes 1 <= Q <= 2.
     """
-    q = apply_kernel(_sampling_q_kernel, _da(wavelength), _da(aperture_diameter), _da(ifov))
-    return named(q, "1", "sampling ratio Q = lambda N / p")
+    return apply_kernel(_sampling_q_kernel, _da(wavelength), _da(aperture_diameter), _da(ifov))
 
 
 @contract(calibration=_CALIBRATION)
@@ -599,6 +599,8 @@ def giqe4(
     return dataset({"niirs": niirs, "gsd_gp": gsd_gp, "flags": fl})
 
 
+@contract(Output("rer_giqe5", "1", "GIQE 5 weighted relative edge response",
+                 references=_RER5_REFERENCE))
 def giqe5_rer(rer_x, rer_y):
     r"""GIQE 5 combined RER of two orthogonal axes.
 
@@ -618,9 +620,7 @@ def giqe5_rer(rer_x, rer_y):
 
     .. math:: RER = \left(\max(R_x, R_y)\,\min(R_x, R_y)^2\right)^{1/3}
     """
-    out = apply_kernel(_giqe5_rer_kernel, _da(rer_x), _da(rer_y))
-    return named(out, "1", "GIQE 5 weighted relative edge response",
-                 references=_RER5_REFERENCE)
+    return apply_kernel(_giqe5_rer_kernel, _da(rer_x), _da(rer_y))
 
 
 @contract(calibration=_CALIBRATION)
