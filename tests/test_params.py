@@ -246,3 +246,20 @@ def test_values_rule_checks_every_value_of_an_array_argument():
         rule.check("slant_range", np.nan)
     lazy = xr.DataArray(dsa.from_array(np.array([-1.0])), dims="r")
     assert rule.check("slant_range", lazy) is lazy  # dask values are not computed here
+
+
+def test_table_and_either_rules_for_a_choice_or_a_lookup_table():
+    table = params.Table("pixel_values", "reflectance_values",
+                         params.Spec("1", "reflectance", **params.FRACTION))
+    rule = params.Either(params.Choice(("minmax", "identity")), table)
+    assert rule.check("reflectance", "minmax") == "minmax"
+    xs, ys = rule.check("reflectance", ([255, 0], [0.9, 0.1]))  # sorted by pixel value
+    assert list(xs) == [0.0, 255.0] and list(ys) == [0.1, 0.9]
+    for bad, message in [
+            ("stretch", r"^reflectance must be one of 'minmax', 'identity' or a table"),
+            (3, r"^reflectance must be a pair \(pixel_values, reflectance_values\)"),
+            (([0], [0.5]), "table needs at least 2 pixel_values and as many"),
+            (([0, 0], [0.1, 0.2]), "pixel_values must be finite and distinct"),
+            (([0, 1], [0.1, 1.5]), r"reflectance_values must lie in \[0, 1\] 1")]:
+        with pytest.raises(ValueError, match=message):
+            rule.check("reflectance", bad)

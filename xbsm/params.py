@@ -193,6 +193,54 @@ class Pair:
 
 
 @dataclass(frozen=True)
+class Table:
+    """A lookup table ``(x values, y values)``, returned as two float arrays sorted by x.
+
+    At least two points, as many y as x, x finite and distinct, every y inside ``spec``'s
+    interval. ``x`` and ``y`` name the two halves in the errors.
+    """
+
+    x: str
+    y: str
+    spec: Spec
+
+    def check(self, name: str, value) -> tuple:
+        """``(x, y)`` as float arrays sorted by x."""
+        try:
+            xs, ys = (np.asarray(v, dtype=float).ravel() for v in value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} must be a pair ({self.x}, {self.y}); "
+                             f"got {value!r:.60}") from None
+        if xs.size < 2 or xs.size != ys.size:
+            raise ValueError(f"{name} table needs at least 2 {self.x} and as many {self.y}; "
+                             f"got {xs.size} and {ys.size}")
+        order = np.argsort(xs)
+        xs, ys = xs[order], ys[order]
+        if not (np.all(np.isfinite(xs)) and np.all(np.diff(xs) > 0)):
+            raise ValueError(f"{name} table {self.x} must be finite and distinct")
+        if np.any(self.spec.violated(ys)):
+            raise ValueError(f"{name} table {self.y} must lie in {self.spec.describe()}")
+        return xs, ys
+
+
+@dataclass(frozen=True)
+class Either:
+    """One of ``choice``'s names, or anything else that ``other`` accepts."""
+
+    choice: Choice
+    other: object  # a rule
+
+    def check(self, name: str, value):
+        """``value`` if a choice, else what ``other`` makes of it."""
+        if value is None or isinstance(value, str):
+            if value in self.choice.choices:
+                return value
+            raise ValueError(f"{name} must be one of {', '.join(map(repr, self.choice.choices))}"
+                             f" or a table; got {value!r}")
+        return self.other.check(name, value)
+
+
+@dataclass(frozen=True)
 class Instance:
     """An object of type ``kind``; ``described`` says which in the error."""
 
@@ -235,7 +283,7 @@ def contract(returns=None, **rules):
     ----------
     returns : xbsm._metadata.Output, optional
         Units and long name of a DataArray result (set on every call).
-    **rules : Spec, Values, Choice, Selection, Pair, Instance or Resolved
+    **rules : Spec, Values, Choice, Selection, Pair, Table, Either, Instance or Resolved
         One per checked argument, by name; the function receives what the rule returns
         (a Selection's tuple, a Pair's floats). Defaults are checked too.
 
