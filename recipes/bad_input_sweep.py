@@ -156,6 +156,8 @@ class Case:
     main: str = "niirs"
     oracle: str = ""
     needs_range: bool = True  # False: naming the parameter (e.g. a file) is enough
+    fragment: str | None = None  # a row of the shared table: what its error must say
+    error: type = ValueError  # ... and its exception type
 
     def oracle_text(self):
         if self.oracle:
@@ -1235,6 +1237,30 @@ cli_case("run_missing_study", ["run", "{tmp}/no_such_study.toml"], ("no_such_stu
          "reject", needs_range=False)
 
 
+# --- the shared bad-input table (tests/bad_input_table.py, which tests/test_bad_inputs.py
+# asserts row by row): an error row is clear when its error says the row's fragment; a
+# result row is flagged or sensible when the row's check passes.
+sys.path.insert(0, str(ROOT / "tests"))
+from bad_input_table import ERROR_ROWS, RESULT_ROWS  # noqa: E402
+
+for row_id, call, error, fragment in ERROR_ROWS:
+    add(f"table.{row_id}", "shared table", f"tests/bad_input_table.py row {row_id}", call,
+        fragment=fragment, error=error, oracle=f"{error.__name__} saying {fragment!r}")
+
+
+def _row_check(check, what):
+    def judge(result):
+        if not check(result):
+            return "silent_wrong", f"fails the row's check: {what}"
+        return ("flagged" if "flag" in what else "sensible"), what
+    return judge
+
+
+for row_id, call, check, what in RESULT_ROWS:
+    add(f"table.{row_id}", "shared table", f"tests/bad_input_table.py row {row_id}", call,
+        expect="check", check=_row_check(check, what), oracle=what)
+
+
 # ---------------------------------------------------------------------------
 # Classification
 
@@ -1359,6 +1385,10 @@ def classify_error(case, exc):
     message = f"{type(exc).__name__}: {text}"
     if isinstance(exc, MemoryError) or MEMORY_RE.search(text):
         return "blowup", message, "memory"
+    if case.fragment is not None:  # a row of the shared table: its fragment is the oracle
+        if isinstance(exc, case.error) and case.fragment in text and raised_by_xbsm(exc):
+            return "clear_error", message, ""
+        return "cryptic_error", message, f"does not say {case.fragment!r}"
     named = any(n and n in text for n in case.names)
     ranged = (bool(RANGE_RE.search(text)) or bool(FIX_RE.search(text))
               or not case.needs_range)

@@ -12,9 +12,17 @@ parsed with :mod:`ast` (nothing is imported) and checked for:
 2. **no submodule imports the package root**: ``from .. import __version__``, ``import
    xbsm``, ``from xbsm import snr``: the root is lazy (PEP 562) and only maps public
    names to their modules; the version lives in ``xbsm/_version.py``.
-3. **kernels stay free of xarray**: a function named ``_<quantity>_kernel`` (or, where
-   another module composes it, ``<quantity>_kernel``) does not mention ``xr`` or ``xarray``
-   (arithmetic in numpy; xarray labels at the boundary, ``_kernels.apply_kernel``).
+3. **kernels and array orchestrators stay free of xarray**: a function named
+   ``_<quantity>_kernel`` (or, where another module composes it, ``<quantity>_kernel``)
+   and a stage's array orchestrator ``<quantity>_arrays`` do not mention ``xr`` or
+   ``xarray`` (arithmetic in numpy, plain arrays in and out; xarray labels at the boundary,
+   ``_kernels.apply_kernel``, or once in ``_chain``'s direct applier).
+4. **only the chain composes three or more stages**: a *stage* is one of :data:`STAGES`
+   (radiometry, noise, geometry, quadrature, otf.system, metrics.edge, metrics.giqe, the
+   atmosphere lookup); a function (or method) outside ``xbsm/_chain.py`` whose body calls
+   public functions of three or more stages (its own module counts when it calls its own
+   public functions) composes the model a second time. Exceptions are in
+   :data:`COMPOSERS_ALLOWED`, one reason per entry.
 
 Each checker is also run on a small broken source string, so that none passes vacuously.
 """
@@ -149,15 +157,103 @@ def _is_kernel(name: str) -> bool:
     return stem.endswith("_kernel") and stem != "kernel" and not stem.startswith("apply_")
 
 
+def _is_array_orchestrator(name: str) -> bool:
+    """The house name of a stage's array orchestrator: ``<quantity>_arrays``."""
+    return name.removeprefix("_").endswith("_arrays")
+
+
 def kernels_using_xarray(source: str, module: str) -> set:
-    """Rule 3: (module, function) for each kernel function that mentions xarray."""
+    """Rule 3: (module, function) for each kernel or array orchestrator that mentions xarray."""
     found = set()
     for node in ast.walk(ast.parse(source)):
-        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and _is_kernel(node.name):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and (
+                _is_kernel(node.name) or _is_array_orchestrator(node.name)):
             names = {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
             if names & {"xr", "xarray"}:
                 found.add((module, node.name))
     return found
+
+
+#: The model's stages, by module (a package stands for every module inside it): their
+#: public functions are what a composition calls.
+STAGES = {"xbsm.atmosphere": "atmosphere lookup", "xbsm.geometry": "geometry",
+          "xbsm.radiometry": "radiometry", "xbsm.noise": "noise",
+          "xbsm.quadrature": "quadrature", "xbsm.otf.system": "otf.system",
+          "xbsm.metrics.edge": "metrics.edge", "xbsm.metrics.giqe": "metrics.giqe"}
+#: The one module that composes the stages.
+CHAIN = "xbsm._chain"
+
+
+def stage_of(module: str) -> str | None:
+    """The stage ``module`` belongs to, or None."""
+    for prefix, stage in STAGES.items():
+        if module == prefix or module.startswith(prefix + "."):
+            return stage
+    return None
+
+
+def stage_functions(modules: dict) -> dict:
+    """Stage -> the public functions its modules define at top level."""
+    out = {}
+    for name, path in modules.items():
+        stage = stage_of(name)
+        if stage is not None:
+            out.setdefault(stage, set()).update(
+                node.name for node in ast.parse(path.read_text()).body
+                if isinstance(node, ast.FunctionDef) and not _is_private(node.name))
+    return out
+
+
+def stage_compositions(source: str, module: str, modules, public: dict, *,
+                       is_package: bool = False) -> dict:
+    """Rule 4: (module, function) -> the stages it calls, for functions calling three or more.
+
+    ``public`` maps each stage to its public function names (:func:`stage_functions`). A
+    call counts as ``stage_module.f(...)`` (the module imported under any name) or
+    ``f(...)`` (``f`` imported from a stage module, or defined public in the module's own
+    stage). Functions and methods are counted whole, nested functions included.
+    """
+    if module == CHAIN:
+        return {}
+    tree = ast.parse(source)
+    by_alias, by_name = {}, {}  # local module name -> stage; local function name -> stage
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            source_module = _resolve(module, is_package, node)
+            for alias in node.names:
+                full, local = f"{source_module}.{alias.name}", alias.asname or alias.name
+                if full in modules and stage_of(full):
+                    by_alias[local] = stage_of(full)
+                elif alias.name in public.get(stage_of(source_module), ()):
+                    by_name[local] = stage_of(source_module)
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.asname and stage_of(alias.name):
+                    by_alias[alias.asname] = stage_of(alias.name)
+    own = stage_of(module)
+    by_name.update({name: own for name in public.get(own, ())})
+    functions = [n for n in tree.body if isinstance(n, ast.FunctionDef)]
+    functions += [m for c in tree.body if isinstance(c, ast.ClassDef) for m in c.body
+                  if isinstance(m, ast.FunctionDef)]
+    found = {}
+    for function in functions:
+        stages = set()
+        for node in ast.walk(function):
+            if not isinstance(node, ast.Call):
+                continue
+            called = node.func
+            if isinstance(called, ast.Name) and called.id in by_name:
+                stages.add(by_name[called.id])
+            elif (isinstance(called, ast.Attribute) and isinstance(called.value, ast.Name)
+                  and called.value.id in by_alias and not _is_private(called.attr)):
+                stages.add(by_alias[called.value.id])
+        if len(stages) >= 3:
+            found[(module, function.name)] = tuple(sorted(stages))
+    return found
+
+
+#: (module, function) -> why it may compose three or more stages outside the chain.
+COMPOSERS_ALLOWED: dict[tuple[str, str], str] = {}
 
 
 def _scan(checker, **kwargs) -> set:
@@ -229,12 +325,39 @@ def test_no_submodule_imports_the_package_root():
     assert not sorted(_scan(root_imports))
 
 
-def test_kernels_do_not_use_xarray():
-    kernels = [node.name for path in module_names().values()
-               for node in ast.walk(ast.parse(path.read_text()))
-               if isinstance(node, ast.FunctionDef) and _is_kernel(node.name)]
-    assert len(kernels) > 50  # the scan sees the package's kernels
+def test_kernels_and_array_orchestrators_do_not_use_xarray():
+    functions = [node.name for path in module_names().values()
+                 for node in ast.walk(ast.parse(path.read_text()))
+                 if isinstance(node, ast.FunctionDef)]
+    assert len([f for f in functions if _is_kernel(f)]) > 50  # the scan sees the kernels
+    assert len([f for f in functions if _is_array_orchestrator(f)]) > 10  # and orchestrators
     assert not sorted(_scan(kernels_using_xarray))
+
+
+def _compositions() -> dict:
+    modules = module_names()
+    public = stage_functions(modules)
+    found = {}
+    for name, path in modules.items():
+        found.update(stage_compositions(path.read_text(), name, modules, public,
+                                        is_package=path.name == "__init__.py"))
+    return found
+
+
+def test_only_the_chain_composes_three_or_more_stages():
+    modules = module_names()
+    assert {stage_of(m) for m in modules} >= set(STAGES.values())  # every stage exists
+    new = sorted(_compositions().keys() - COMPOSERS_ALLOWED.keys())
+    assert not new, "functions composing three or more stages outside xbsm/_chain.py " \
+        "(go through the chain, or allow-list with a reason):\n" + "\n".join(
+            f"{m}.{f}: {', '.join(_compositions()[(m, f)])}" for m, f in new)
+
+
+def test_composer_allow_list_has_no_stale_entries_and_a_reason_for_each():
+    stale = sorted(COMPOSERS_ALLOWED.keys() - _compositions().keys())
+    assert not stale, f"allow-list entries no longer needed: {stale}"
+    assert all(isinstance(r, str) and r.strip() and "\n" not in r
+               for r in COMPOSERS_ALLOWED.values())
 
 
 # ---- the checkers themselves, on broken examples ----------------------------------------
@@ -297,3 +420,42 @@ def test_kernel_checker_catches_broken_examples():
             "def door(x):\n    return xr.apply_ufunc(x)\n")
     assert kernels_using_xarray(broken, "xbsm.a") == {("xbsm.a", "_a_kernel")}
     assert kernels_using_xarray(fine, "xbsm.a") == set()
+
+
+def test_kernel_checker_catches_an_array_orchestrator_using_xarray():
+    broken = "def noise_arrays(p):\n    return xr.Variable('x', p)\n"
+    fine = "def noise_arrays(p):\n    return np.sqrt(p)\n"
+    assert kernels_using_xarray(broken, "xbsm.a") == {("xbsm.a", "noise_arrays")}
+    assert kernels_using_xarray(fine, "xbsm.a") == set()
+
+
+_STAGE_MODULES = {"xbsm", "xbsm.a", "xbsm.geometry", "xbsm.radiometry", "xbsm.noise",
+                  "xbsm.otf", "xbsm.otf.system", "xbsm._chain"}
+_PUBLIC = {"geometry": {"slant_range"}, "radiometry": {"signal_terms"},
+           "noise": {"noise_terms"}, "otf.system": {"system_otf"}}
+
+
+@pytest.mark.parametrize(("source", "expected"), [
+    ("from . import geometry, radiometry, noise\n"
+     "def f(s):\n    return noise.noise_terms(radiometry.signal_terms(geometry.slant_range(s)))",
+     {("xbsm.a", "f"): ("geometry", "noise", "radiometry")}),
+    ("from .geometry import slant_range as r\nfrom .noise import noise_terms\n"
+     "from .otf import system as o\n"
+     "class A:\n    def f(self, s):\n        def g():\n            return o.system_otf(s)\n"
+     "        return noise_terms(r(s)), g()",
+     {("xbsm.a", "f"): ("geometry", "noise", "otf.system")}),
+    # two stages, private helpers, and three stages spread over two functions are fine
+    ("from . import geometry, radiometry, noise\n"
+     "def f(s):\n    return radiometry.signal_terms(geometry.slant_range(s))\n"
+     "def g(s):\n    return noise.noise_terms(s), noise._helper(radiometry._x(s))", {}),
+])
+def test_stage_composition_checker_catches_broken_examples(source, expected):
+    assert stage_compositions(source, "xbsm.a", _STAGE_MODULES, _PUBLIC) == expected
+    assert stage_compositions(source, "xbsm._chain", _STAGE_MODULES, _PUBLIC) == {}
+
+
+def test_stage_composition_checker_counts_the_modules_own_stage():
+    source = ("from . import geometry, noise\n"
+              "def f(s):\n    return signal_terms(noise.noise_terms(geometry.slant_range(s)))")
+    assert stage_compositions(source, "xbsm.radiometry", _STAGE_MODULES, _PUBLIC) == {
+        ("xbsm.radiometry", "f"): ("geometry", "noise", "radiometry")}

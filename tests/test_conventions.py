@@ -618,3 +618,30 @@ BAD_CHOICES = MappingProxyType({
 def test_every_enumerated_argument_rejects_a_bad_value(argument):
     with pytest.raises(ValueError, match=argument):
         BAD_CHOICES[argument]()
+
+
+# ---- declared contracts (xbsm.params.contract) ------------------------------------------
+
+def _declared_functions():
+    """(module name, function) for every public function that carries a contract."""
+    import pkgutil
+
+    out = []
+    for info in pkgutil.walk_packages(xbsm.__path__, "xbsm."):
+        module = importlib.import_module(info.name)
+        out += [(info.name, f) for name, f in vars(module).items()
+                if not name.startswith("_") and hasattr(f, "__contract__")
+                and f.__module__ == info.name]
+    return out
+
+
+def test_every_declared_choice_is_documented_on_its_function():
+    # a Choice is the one list of a knob's values: the docstring must offer the same ones
+    declared = _declared_functions()
+    assert len(declared) > 40  # the scan sees the declared functions
+    for module_name, func in declared:
+        for argument, rule in func.__contract__.rules.items():
+            if isinstance(rule, xbsm.params.Choice):
+                for choice in (c for c in rule.choices if c is not None):
+                    assert f'"{choice}"' in func.__doc__, (
+                        f"{module_name}.{func.__name__}: {argument} {choice!r}")

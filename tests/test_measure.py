@@ -319,10 +319,10 @@ def test_an_edge_leaving_the_region_raises():
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [
-    ({"oversampling": 0}, "oversampling must be a positive integer"),
-    ({"oversampling": 2.5}, "oversampling must be a positive integer"),
-    ({"oversampling": 4.0}, "oversampling must be a positive integer"),
-    ({"oversampling": True}, "oversampling must be a positive integer"),
+    ({"oversampling": 0}, r"oversampling must be a whole number in \[1, inf\)"),
+    ({"oversampling": 2.5}, r"oversampling must be a whole number in \[1, inf\)"),
+    ({"oversampling": 4.0}, r"oversampling must be a whole number in \[1, inf\)"),
+    ({"oversampling": True}, r"oversampling must be a whole number in \[1, inf\)"),
     ({"window": "hann"}, "window must be one of"),
     ({"method": "sfrmat"}, "method must be one of"),
     ({"roi": [slice(None), slice(None)]}, "roi must be None"),

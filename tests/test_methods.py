@@ -227,3 +227,9 @@ def test_atmosphere_interpolation_defaults_extinction_profile_and_pybsm_keeps_li
         "accurate (atmosphere_interpolation=same-elevation)")
     with pytest.raises(ValueError, match="atmosphere_interpolation must be one of"):
         xbsm.method("accurate", atmosphere_interpolation="same_elevation")
+
+
+def test_every_knob_has_a_declared_rule():
+    from xbsm.methods import KNOB_RULES
+
+    assert set(KNOB_RULES) | {"name"} == set(Method.knobs())

@@ -669,11 +669,12 @@ def test_calibration_override_changes_flags_not_niirs():
 
 
 @pytest.mark.parametrize("change, match", [
-    (dict(elevation=(25.0, 90.0)), "elevation must be a \\(low, high\\) pair in radians"),
+    (dict(elevation=(25.0, 90.0)), "elevation must be None or a \\(low, high\\) pair in "
+     "\\[0, 1.5708\\] rad"),
     (dict(snr=(5.0, 4.0)), "snr must be None or a \\(low, high\\) pair"),
     (dict(rer=0.3), "rer must be None or a \\(low, high\\) pair"),
     (dict(gsd=(np.nan, 1.0)), "gsd must be None"),
-    (dict(q=(-1.0, 2.0)), "q must be None .* low >= 0"),
+    (dict(q=(-1.0, 2.0)), "q must be None or a \\(low, high\\) pair in \\[0, inf\\) 1"),
     (dict(snr=(1, 2, 3)), "snr must be None"),
     (dict(nirs=(0, 10)), "unknown GiqeCalibration field"),
 ])

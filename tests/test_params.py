@@ -4,6 +4,7 @@ import pytest
 import xarray as xr
 
 import xbsm
+from xbsm import params
 from xbsm import pybsm_compat as compat
 
 BASE = dict(aperture_diameter=0.275, focal_length=4.0, pixel_pitch_x=8e-6,
@@ -175,3 +176,90 @@ def test_result_names_cover_every_result_variable():
     # a parameter echoed under its own name may still sweep on its own dimension
     echoed = olson_sensor("nir", read_noise=xr.DataArray([10.0, 25.0], dims="read_noise"))
     np.testing.assert_array_equal(xbsm.niirs(echoed, sc).read_noise, [10.0, 25.0])
+
+
+# ---- declared contracts (params.contract) ----------------------------------------------------
+
+def test_contract_checks_positional_keyword_and_default_arguments():
+    from xbsm._metadata import Output
+
+    @params.contract(Output("out", "m", "an output"), form=params.Choice(("a", "b")),
+                     count=params.Spec("1", "a count", low=1.0, whole=True))
+    def f(x, form="a", *, count=2):
+        return xr.DataArray(x, attrs={"units": "s", "other": 1})
+
+    out = f(1.0, "b", count=3)
+    assert out.attrs == {"units": "m", "long_name": "an output"}  # exactly the declared ones
+    with pytest.raises(ValueError, match=r"^form must be one of 'a', 'b'; got 'c'$"):
+        f(1.0, "c")
+    with pytest.raises(ValueError, match=r"^form must be one of 'a', 'b'; got 'c'$"):
+        f(1.0, form="c")
+    with pytest.raises(ValueError, match=r"^count must be a whole number in \[1, inf\); got 0$"):
+        f(1.0, count=0)
+    with pytest.raises(ValueError, match="count must be a whole number"):
+        f(1.0, count=2.5)
+    assert set(f.__contract__.rules) == {"form", "count"}
+    assert f.__contract__.returns.units == "m"
+
+
+def test_contract_hands_the_function_what_the_rule_returns():
+    @params.contract(outputs=params.Selection(("a", "b")),
+                     span=params.Pair(params.Spec("1", "fraction", **params.FRACTION)))
+    def f(outputs=None, span=(0.1, 0.9)):
+        return outputs, span
+
+    assert f() == (("a", "b"), (0.1, 0.9))
+    assert f("b", [0, 1]) == (("b",), (0.0, 1.0))
+    with pytest.raises(ValueError, match=r"^outputs must be a non-empty selection of"):
+        f(())
+    with pytest.raises(ValueError, match=r"^span must be a \(low, high\) pair in \[0, 1\] 1 "
+                                         r"with low < high; got \(0.5, 0.5\)$"):
+        f(span=(0.5, 0.5))
+    with pytest.raises(ValueError, match="span must be a"):
+        f(span=(0.5,))
+
+
+def test_pair_may_reach_an_unbounded_end_and_be_optional():
+    rule = params.Pair(params.Spec("1", "snr", low=0.0), equal=True, optional=True)
+    assert rule.check("snr", (4.1, np.inf)) == (4.1, np.inf)
+    assert rule.check("snr", None) is None
+    assert rule.check("snr", (2.0, 2.0)) == (2.0, 2.0)
+    for bad in [(-1.0, 2.0), (3.0, 2.0), (np.nan, 2.0), 0.3]:
+        with pytest.raises(ValueError, match=r"^snr must be None or a \(low, high\) pair in "
+                                             r"\[0, inf\) 1 with low <= high; got"):
+            rule.check("snr", bad)
+
+
+def test_instance_names_the_type_it_got():
+    rule = params.Instance(dict, "a mapping (e.g. {})")
+    with pytest.raises(ValueError, match=r"^table must be a mapping \(e.g. \{\}\); got list$"):
+        rule.check("table", [])
+
+
+def test_values_rule_checks_every_value_of_an_array_argument():
+    rule = params.Values(params.Spec("m", "slant range", **params.POSITIVE))
+    ok = xr.DataArray([1.0, 2.0], dims="r")
+    assert rule.check("slant_range", ok) is ok
+    with pytest.raises(ValueError, match=r"^slant_range must lie in \(0, inf\) m; got -1.0$"):
+        rule.check("slant_range", np.array([1.0, -1.0]))
+    with pytest.raises(ValueError, match="slant_range must lie in"):
+        rule.check("slant_range", np.nan)
+    lazy = xr.DataArray(dsa.from_array(np.array([-1.0])), dims="r")
+    assert rule.check("slant_range", lazy) is lazy  # dask values are not computed here
+
+
+def test_table_and_either_rules_for_a_choice_or_a_lookup_table():
+    table = params.Table("pixel_values", "reflectance_values",
+                         params.Spec("1", "reflectance", **params.FRACTION))
+    rule = params.Either(params.Choice(("minmax", "identity")), table)
+    assert rule.check("reflectance", "minmax") == "minmax"
+    xs, ys = rule.check("reflectance", ([255, 0], [0.9, 0.1]))  # sorted by pixel value
+    assert list(xs) == [0.0, 255.0] and list(ys) == [0.1, 0.9]
+    for bad, message in [
+            ("stretch", r"^reflectance must be one of 'minmax', 'identity' or a table"),
+            (3, r"^reflectance must be a pair \(pixel_values, reflectance_values\)"),
+            (([0], [0.5]), "table needs at least 2 pixel_values and as many"),
+            (([0, 0], [0.1, 0.2]), "pixel_values must be finite and distinct"),
+            (([0, 1], [0.1, 1.5]), r"reflectance_values must lie in \[0, 1\] 1")]:
+        with pytest.raises(ValueError, match=message):
+            rule.check("reflectance", bad)

@@ -514,3 +514,19 @@ def test_noise_figure_of_a_study_splits_self_emission_by_source():
     labels = _tick_texts(figures["figure4_noise.png"].axes[0])
     assert {"cold shield", "optics emission", "cold filter emission", "stray light"} <= set(
         labels)
+
+
+def test_noise_figure_of_an_older_result_keeps_one_self_emission_bar():
+    # a result written before xbsm.study.attributes (its study text only): the figure
+    # does not parse the study file, so self-emission stays one bar
+    from test_noise import MWIR
+
+    sensor = "\n".join(f"{k} = {v!r}" for k, v in MWIR.items())
+    text = (f"[sensor]\n{sensor}\n[scenario]\naltitude = 3000.0\nvisibility = 23.0\n"
+            "[sweep]\nground_range = [5000.0, 20000.0]\n")
+    result = st.run(st.parse(text)).compute()
+    result.attrs = {k: v for k, v in result.attrs.items()
+                    if not k.startswith(("xbsm_sensor_", "xbsm_scenario_", "xbsm_band"))}
+    figures = dict(plot_figures._noise_figure(result, plot_figures.context_of(result)))
+    labels = _tick_texts(figures["figure4_noise.png"].axes[0])
+    assert "emission / stray" in labels and "cold shield" not in labels

@@ -559,3 +559,48 @@ def test_a_swallowed_ctrl_c_still_stops_the_run(tiny, tmp_path, monkeypatch):
     interrupts.INTERRUPTED.clear()
     assert not (tmp_path / "out.nc").exists()
     assert len(list((tmp_path / "out.nc.parts").glob("*.npz"))) == 1  # its work kept
+
+
+def test_written_result_records_its_fixed_parameters_for_the_figures(tmp_path):
+    # xbsm.study.attributes: the parameters of the study file below, read back from the
+    # NetCDF file without parsing the study text (a curve, a kernel and two bands)
+    from xbsm.study.attributes import parameters_of
+
+    text = """
+[sensor]
+aperture_diameter = 0.2
+focal_length = 3.0
+pixel_pitch_x = 10e-6
+quantum_efficiency = { wavelength = [0.5e-6, 0.7e-6, 0.9e-6], values = [0.4, 0.6, 0.3] }
+filter_kernel = [[0.0, -0.25, 0.0], [-0.25, 2.0, -0.25], [0.0, -0.25, 0.0]]
+[bands.green]
+wavelength_min = 0.5e-6
+wavelength_max = 0.6e-6
+[bands.red]
+wavelength_min = 0.6e-6
+wavelength_max = 0.7e-6
+[scenario]
+altitude = 3000.0
+visibility = 23.0
+[sweep]
+ground_range = [5000.0, 20000.0]
+[outputs]
+variables = ["snr"]
+"""
+    path = tmp_path / "out.nc"
+    study.write(study.run(study.parse(text)), path)
+    with xr.open_dataset(path) as ds:
+        sensor, scenario = parameters_of(ds, band=1)
+    assert scenario == {"altitude": 3000.0, "visibility": 23.0}
+    assert sensor["focal_length"] == 3.0 and sensor["wavelength_min"] == 0.6e-6
+    assert list(sensor["quantum_efficiency"].values) == [0.4, 0.6, 0.3]
+    assert list(sensor["quantum_efficiency"]["wavelength"].values) == [0.5e-6, 0.7e-6, 0.9e-6]
+    assert sensor["filter_kernel"].shape == (3, 3) and sensor["filter_kernel"][1, 1] == 2.0
+    xbsm.sensor(**sensor)  # a sensor again
+
+
+def test_a_result_without_the_attributes_records_no_parameters():
+    # a result written before xbsm.study.attributes existed carries only xbsm_study
+    from xbsm.study.attributes import parameters_of
+
+    assert parameters_of(xr.Dataset(attrs={"xbsm_study": "[sensor]\n"}), band=0) == ({}, {})

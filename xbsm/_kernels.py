@@ -7,15 +7,16 @@ hundreds of them made one scenario slower than pyBSM.
 
 :func:`apply_kernel` is what every stage of the model chain calls (image
 simulation, measurement and studies, whose kernels run once per whole image or
-chunk, call ``xr.apply_ufunc`` directly). It keeps what the xarray
-arithmetic it replaces did: the arguments join as arithmetic joins them (inner,
-without copies when their indexes already agree), the result's dims are the
-union of the arguments' dims in order of first appearance, coordinates keep
-their attributes, floating-point exceptions give IEEE results without warnings,
-and dask arguments give lazy results with the chunks they came with (a
-contraction inside a kernel keeps them; ``xr.dot`` hands dask's ``einsum``,
-which rechunks its inputs whenever the output chunk would outgrow the largest
-input chunk).
+chunk, call ``xr.apply_ufunc`` directly). It is ``xr.apply_ufunc``
+with what the xarray arithmetic it replaces did: the arguments join as
+arithmetic joins them (inner, without copies when their indexes already agree),
+the result's dims are the union of the arguments' dims in order of first
+appearance, coordinates keep their attributes, floating-point exceptions give
+IEEE results without warnings, and dask arguments give lazy results with the
+chunks they came with (a contraction inside a kernel keeps them; ``xr.dot``
+hands dask's ``einsum``, which rechunks its inputs whenever the output chunk
+would outgrow the largest input chunk). Eager arguments take the same path: a
+copy of ``apply_ufunc`` for them was measured at no gain (issue 22).
 """
 
 from __future__ import annotations
@@ -83,91 +84,17 @@ def apply_kernel(kernel, /, *args, core=None, outputs=((),), sizes=None, dtype=f
         (Plain arrays if every argument is plain.) Attributes are those of the first
         argument: callers name their results.
     """
-    n = len(outputs)
-    dtypes = list(dtype) if isinstance(dtype, (list, tuple)) else [dtype] * n
+    dtypes = list(dtype) if isinstance(dtype, (list, tuple)) else [dtype] * len(outputs)
 
     def quiet(*arrays):
         with np.errstate(all="ignore"):  # IEEE results, as xarray arithmetic gives them
             return kernel(*arrays, **knobs)
 
-    labelled = [a for a in args if isinstance(a, (xr.DataArray, xr.Variable))]
-    if not any(_is_lazy(a) for a in labelled):
-        out = _apply_eager(quiet, args, labelled, core or [[]] * len(args), outputs)
-        if out is not None:
-            return out
     return xr.apply_ufunc(
         quiet, *args, input_core_dims=core, output_core_dims=[list(o) for o in outputs],
         join=join_for(args), dask="parallelized", output_dtypes=dtypes,
         keep_attrs="override",
         dask_gufunc_kwargs={"allow_rechunk": True, "output_sizes": dict(sizes or {})})
-
-
-def _is_lazy(a) -> bool:
-    return getattr(a.data, "chunks", None) is not None
-
-
-def _apply_eager(func, args, labelled, core, outputs):
-    """:func:`xr.apply_ufunc`'s result for eager arguments whose indexes agree, built directly.
-
-    The same dims (the arguments' non-core dims in order of first appearance, then each
-    output's core dims), data layout, coordinates (those without a dropped core dim, with
-    their attributes and indexes) and attributes (the first labelled argument's), without
-    apply_ufunc's per-call machinery. None where xarray's own path is needed: a
-    coordinate that differs between arguments, a dimension of two lengths, indexes that
-    differ (an alignment).
-    """
-    if not labelled:
-        return func(*args)
-    if join_for(args) != "exact":
-        return None
-    core_dims = {d for c in core for d in c} | {d for o in outputs for d in o}
-    sizes = {}
-    for a in labelled:
-        for dim, size in zip(a.dims, a.shape, strict=True):
-            if sizes.setdefault(dim, size) != size:
-                return None
-    arrays = [a for a in labelled if isinstance(a, xr.DataArray)]
-    coords = _merged_coords(arrays, {d for c in core for d in c} - {d for o in outputs for d in o})
-    if coords is None:  # decided before the kernel runs, so that it never runs twice
-        return None
-    broadcast = tuple(d for d in sizes if d not in core_dims)
-    data = [_layout(a, broadcast, tuple(c)) if isinstance(a, (xr.DataArray, xr.Variable))
-            else a for a, c in zip(args, core, strict=True)]
-    result = func(*data)
-    attrs = dict((arrays or labelled)[0].attrs)
-    results = result if len(outputs) > 1 else (result,)
-    made = []
-    for values, out_core in zip(results, outputs, strict=True):
-        variable = xr.Variable(broadcast + tuple(out_core), values, attrs)
-        if arrays:
-            kept = {name: coords[0][name] for name in coords[0]
-                    if set(coords[0][name].dims) <= set(variable.dims)}
-            variable = xr.DataArray(variable, coords=xr.Coordinates(
-                kept, {n: i for n, i in coords[1].items() if n in kept}))
-        made.append(variable)
-    return tuple(made) if len(outputs) > 1 else made[0]
-
-
-def _layout(a, broadcast, core):
-    """``a``'s data with its broadcast dims in ``broadcast`` order and its core dims last.
-
-    Missing broadcast dims become length-1 axes, except leading ones (numpy broadcasts).
-    """
-    dims, data = a.dims, a.data
-    present = tuple(d for d in broadcast if d in dims)
-    order = present + core
-    if order != dims:
-        data = np.transpose(data, [dims.index(d) for d in order])
-    key, started = [], False
-    for d in broadcast:
-        if d in dims:
-            key.append(slice(None))
-            started = True
-        elif started:
-            key.append(np.newaxis)
-    if len(key) != len(present):
-        data = data[(*key, *(slice(None) for _ in core))]
-    return data
 
 
 def _merged_coords(arrays, dropped):

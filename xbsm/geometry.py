@@ -10,17 +10,17 @@ import numpy as np
 import xarray as xr
 
 from ._kernels import apply_kernel, dataset
-from ._metadata import Output, declared, named, outputs
+from ._metadata import Output, declared, outputs
 from .constants import EARTH_RADIUS
+from .params import Choice, contract
 
 #: Formulas of the curved-earth triangle: "stable" (default: no cancellation near nadir or
 #: on short paths) or "law-of-cosines" (pyBSM 0.16.1's, for number-for-number parity).
 FORMS = ("stable", "law-of-cosines")
-
-
-def _check_form(form):
-    if form not in FORMS:
-        raise ValueError(f"form must be one of {', '.join(map(repr, FORMS))}; got {form!r}")
+#: The GIQE elevation angle: "look-down" (pyBSM's, at the sensor) or "target" (the sensor's
+#: elevation above the target's horizon).
+ELEVATIONS = ("look-down", "target")
+_FORM = Choice(FORMS)
 
 
 # ---------------------------------------------------------------------------- kernels
@@ -150,6 +150,7 @@ def _product_kernel(a, b):
 
 
 
+@contract(Output("slant_range", "m", "slant range"), form=_FORM)
 def slant_range(ground_range, sensor_altitude, target_altitude=0.0, *, form="stable"):
     r"""Slant range between target and sensor over a spherical Earth.
 
@@ -179,12 +180,11 @@ def slant_range(ground_range, sensor_altitude, target_altitude=0.0, *, form="sta
     pyBSM's :math:`\sqrt{a^2 + c^2 - 2ac\cos\theta}` loses about
     :math:`\log_{10}(ac/R^2)` digits (7 on a 1 km path).
     """
-    _check_form(form)
     if form == "law-of-cosines":
         out = apply_kernel(_slant_range_cosines, target_altitude, sensor_altitude, ground_range)
     else:
         out = apply_kernel(_slant_range_stable, sensor_altitude, target_altitude, ground_range)
-    return named(out, "m", "slant range")
+    return out
 
 
 def _central_angle_legs(slant_range, a, c):
@@ -200,6 +200,7 @@ def _central_angle_legs(slant_range, a, c):
     return sine, 1.0 - two_half_sq, two_half_sq
 
 
+@contract(Output("nadir_angle", "rad", "nadir angle"), form=_FORM)
 def nadir_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="stable"):
     r"""Angle at the sensor between nadir and the line of sight to the target.
 
@@ -237,14 +238,14 @@ def nadir_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="stab
     cosines loses half the digits there: 1.388e-5 rad for an exact 1.111e-5 at 0.1 m
     from nadir at 9 km).
     """
-    _check_form(form)
     if form == "law-of-cosines":
         out = apply_kernel(_nadir_angle_cosines, target_altitude, sensor_altitude, slant_range)
     else:
         out = apply_kernel(_nadir_angle_stable, target_altitude, slant_range, sensor_altitude)
-    return named(out, "rad", "nadir angle")
+    return out
 
 
+@contract(Output("elevation_angle", "rad", "elevation angle"), form=_FORM)
 def elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="stable"):
     r"""Look-down angle of the line of sight below the sensor's horizontal.
 
@@ -271,10 +272,10 @@ def elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="
         NaN for a slant range shorter than the height difference
         (:func:`nadir_angle`). [rad]
     """
-    out = np.pi / 2 - nadir_angle(slant_range, sensor_altitude, target_altitude, form=form)
-    return named(out, "rad", "elevation angle")
+    return np.pi / 2 - nadir_angle(slant_range, sensor_altitude, target_altitude, form=form)
 
 
+@contract(Output("altitude", "m", "altitude along the line of sight"), form=_FORM)
 def altitude_along_path(distance_from_target, slant_range, sensor_altitude, target_altitude=0.0,
                         *, form="stable"):
     r"""Height above the spherical Earth at a point on the line of sight.
@@ -309,12 +310,12 @@ def altitude_along_path(distance_from_target, slant_range, sensor_altitude, targ
     in its nadir angle). A slant range shorter than the height difference is
     NaN (:func:`nadir_angle`).
     """
-    _check_form(form)
     out = apply_kernel(_altitude_along_path_kernel, sensor_altitude, slant_range,
                        distance_from_target, target_altitude, form=form)
-    return named(out, "m", "altitude along the line of sight")
+    return out
 
 
+@contract(Output("ifov", "rad", "instantaneous field of view"))
 def ifov(pixel_pitch, focal_length):
     """Instantaneous field of view of one detector pitch.
 
@@ -330,10 +331,10 @@ def ifov(pixel_pitch, focal_length):
     float or xr.DataArray
         Angular sample spacing. [rad]
     """
-    return named(apply_kernel(_ratio_kernel, pixel_pitch, focal_length), "rad",
-                 "instantaneous field of view")
+    return apply_kernel(_ratio_kernel, pixel_pitch, focal_length)
 
 
+@contract(Output("gsd", "m", "ground sample distance"))
 def ground_sample_distance(ifov, slant_range):
     """Ground sample distance in the plane normal to the line of sight (IBSM Eq. 3-62).
 
@@ -349,9 +350,11 @@ def ground_sample_distance(ifov, slant_range):
     float or xr.DataArray
         Ground sample distance. [m]
     """
-    return named(apply_kernel(_product_kernel, ifov, slant_range), "m", "ground sample distance")
+    return apply_kernel(_product_kernel, ifov, slant_range)
 
 
+@contract(Output("elevation_angle", "rad", "elevation angle at the target"),
+          form=_FORM)
 def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *, form="stable"):
     r"""Elevation of the sensor above the target's local horizontal.
 
@@ -381,12 +384,12 @@ def target_elevation_angle(slant_range, sensor_altitude, target_altitude=0.0, *,
 
     .. math:: \epsilon = \operatorname{atan2}\big((a - c) - 2a\sin^2(\theta/2),\ a\sin\theta\big)
     """
-    _check_form(form)
     out = apply_kernel(_target_elevation_kernel, sensor_altitude, target_altitude, slant_range,
                  form=form)
-    return named(out, "rad", "elevation angle at the target")
+    return out
 
 
+@contract(Output("ground_range", "m", "ground range"))
 def ground_range_at_elevation(elevation_angle, sensor_altitude):
     r"""Ground range at which a sensor sees a target on the ground at a given elevation.
 
@@ -415,8 +418,7 @@ def ground_range_at_elevation(elevation_angle, sensor_altitude):
 
     and the central angle is :math:`\operatorname{atan2}(s \cos e,\ R + s \sin e)`.
     """
-    out = apply_kernel(_ground_range_at_angle, elevation_angle, sensor_altitude)
-    return named(out, "m", "ground range")
+    return apply_kernel(_ground_range_at_angle, elevation_angle, sensor_altitude)
 
 
 def _ground_range_at_angle(elevation_angle, sensor_altitude):
@@ -424,6 +426,7 @@ def _ground_range_at_angle(elevation_angle, sensor_altitude):
                                             sensor_altitude)
 
 
+@contract(form=_FORM, elevation=Choice(ELEVATIONS))
 def viewing_geometry(ground_range, altitude, pixel_pitch_x, pixel_pitch_y, focal_length, *,
                      elevation="target", form="stable") -> xr.Dataset:
     """Slant range, GIQE elevation angle, IFOVs and GSDs of every scenario.
@@ -446,7 +449,6 @@ def viewing_geometry(ground_range, altitude, pixel_pitch_x, pixel_pitch_y, focal
         ``slant_range`` [m], ``elevation_angle`` [rad], ``ifov_x``, ``ifov_y`` [rad],
         ``gsd_x``, ``gsd_y`` [m].
     """
-    _check_form(form)
     as_da = [x if isinstance(x, xr.DataArray) else xr.DataArray(x)
              for x in (altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length)]
     altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length = as_da

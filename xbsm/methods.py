@@ -11,13 +11,13 @@ overridden one by one::
 from __future__ import annotations
 
 import dataclasses
-import numbers
 from dataclasses import dataclass
 from types import MappingProxyType
 
 from .atmosphere.rules import INTERPOLATIONS
 from .constants import CODATA, PYBSM_CODATA_2014, Constants
-from .params import unknown_keyword
+from .geometry import ELEVATIONS, FORMS
+from .params import Choice, Instance, Spec, unknown_keyword
 
 #: Allowed values of every text knob.
 KNOB_CHOICES = MappingProxyType({
@@ -27,8 +27,8 @@ KNOB_CHOICES = MappingProxyType({
     "edge_otf": ("abs", "real"),
     "filter_otf": ("pybsm", "dtft"),
     "turbulence_path_rule": ("trapezoid", "gauss-legendre"),
-    "elevation": ("look-down", "target"),
-    "geometry": ("stable", "law-of-cosines"),
+    "elevation": ELEVATIONS,
+    "geometry": FORMS,
 })
 #: Allowed range [low, high] of every whole-number knob. The upper limits guard memory:
 #: each bounds an array the knob sizes (frequency nodes, path samples, wavelengths) well
@@ -49,31 +49,15 @@ KNOB_REALS = MappingProxyType({
 })
 
 
-def _check_knob(name, value):
-    """Raise ValueError unless ``value`` is allowed for knob ``name``."""
-    if name in KNOB_CHOICES:
-        if not (isinstance(value, str) and value in KNOB_CHOICES[name]):
-            choices = ", ".join(map(repr, KNOB_CHOICES[name]))
-            raise ValueError(f"method knob {name} must be one of {choices}; got {value!r}")
-    elif name in KNOB_INTEGERS:
-        low, high = KNOB_INTEGERS[name]
-        if (isinstance(value, bool) or not isinstance(value, numbers.Integral)
-                or not low <= value <= high):
-            raise ValueError(
-                f"method knob {name} must be a whole number in [{low}, {high}]; got {value!r}")
-    elif name in KNOB_REALS:
-        low, high, closed = KNOB_REALS[name]
-        real = isinstance(value, numbers.Real) and not isinstance(value, bool)
-        above = real and (value >= low if closed else value > low)
-        if not (real and above and value <= high):
-            bracket = "[" if closed else "("
-            raise ValueError(
-                f"method knob {name} must be a real number in {bracket}{low:g}, {high:g}]; "
-                f"got {value!r}")
-    elif name == "constants" and not isinstance(value, Constants):
-        raise ValueError(f"method knob constants must be a Constants object; got {value!r}")
-    elif name == "name" and not (isinstance(value, str) and value):
-        raise ValueError(f"method knob name must be a non-empty string; got {value!r}")
+#: The declared rule of every knob but ``name`` (a non-empty string), from the tables above.
+KNOB_RULES = MappingProxyType({
+    "constants": Instance(Constants, "a Constants object (xbsm.constants)"),
+    **{name: Choice(choices) for name, choices in KNOB_CHOICES.items()},
+    **{name: Spec("1", name, low, high, whole=True)
+       for name, (low, high) in KNOB_INTEGERS.items()},
+    **{name: Spec("1", name, low, high, low_open=not closed)
+       for name, (low, high, closed) in KNOB_REALS.items()},
+})
 
 
 @dataclass(frozen=True)
@@ -144,8 +128,10 @@ class Method:
     Q = lambda F# / p < 0.12."""
 
     def __post_init__(self):
-        for field in dataclasses.fields(self):
-            _check_knob(field.name, getattr(self, field.name))
+        if not (isinstance(self.name, str) and self.name):
+            raise ValueError(f"method knob name must be a non-empty string; got {self.name!r}")
+        for name, rule in KNOB_RULES.items():
+            rule.check(f"method knob {name}", getattr(self, name))
 
     def overrides(self) -> dict:
         """Knobs that differ from the preset of the same name (every knob if none has it)."""

@@ -12,9 +12,13 @@ import xarray as xr
 
 from . import _chain, metrics
 from .methods import method as resolve_method
-from .params import check_inputs
+from .params import Choice, Resolved, check_inputs, contract
+from .radiometry import TARGETS
+
+_METHOD = Resolved(resolve_method)
 
 
+@contract(method=_METHOD, targets=Choice(TARGETS))
 def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets="giqe"):
     """Contrast signal-to-noise ratio and its breakdown (paper Sec. 2.2-2.3, Figure 4).
 
@@ -45,11 +49,10 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
         ``flags``.
     """
     check_inputs(sensor, scenario)
-    if targets not in ("giqe", "scenario"):
-        raise ValueError(f"targets must be 'giqe' or 'scenario'; got {targets!r}")
-    return _chain.snr(sensor, scenario, resolve_method(method), targets)
+    return _chain.snr(sensor, scenario, method, targets)
 
 
+@contract(method=_METHOD, calibration=Resolved(metrics.giqe_calibrations))
 def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibration=None):
     """Predicted NIIRS by GIQE 3, 4 and 5 with every intermediate (paper Sec. 3).
 
@@ -89,10 +92,10 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
     with it, with its noise gain.
     """
     check_inputs(sensor, scenario)
-    calibration = metrics.giqe_calibrations(calibration)
-    return _chain.niirs(sensor, scenario, resolve_method(method), calibration)
+    return _chain.niirs(sensor, scenario, method, calibration)
 
 
+@contract(method=_METHOD)
 def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method="accurate",
                *, fy=None):
     """System OTF and every component for a sensor in a scenario (paper Figure 5).
@@ -120,4 +123,4 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method=
         weights, and so the polychromatic OTFs, are undefined).
     """
     check_inputs(sensor, scenario)
-    return _chain.system_otf(sensor, scenario, resolve_method(method), frequency, fy)
+    return _chain.system_otf(sensor, scenario, method, frequency, fy)

@@ -11,6 +11,7 @@ from . import radiometry
 from ._kernels import apply_kernel, dataset
 from ._metadata import Output, declared, named, outputs
 from .constants import CODATA
+from .params import contract
 
 # NumPy kernels (plain arrays in and out, no checks); the public functions below wrap them
 # in one ``xr.apply_ufunc`` each, which broadcasts, aligns and carries dask. Like xarray's
@@ -78,6 +79,7 @@ def _scene_noise_kernel(target_rate, integration_time, tdi_stages, background_ra
         return np.sqrt(scene_and_path**2 - np.sqrt(path_rate * exposure) ** 2)
 
 
+@contract(Output("shot_noise", "count", "shot noise"))
 def shot_noise(photoelectrons):
     """Photon shot noise of a photoelectron count (Poisson).
 
@@ -91,9 +93,10 @@ def shot_noise(photoelectrons):
     float or xr.DataArray
         [rms electrons]
     """
-    return named(apply_kernel(_shot_noise_kernel, photoelectrons), "count", "shot noise")
+    return apply_kernel(_shot_noise_kernel, photoelectrons)
 
 
+@contract(Output("dark_current_noise", "count", "dark current noise"))
 def dark_current_noise(dark_current, integration_time, tdi_stages=1.0):
     """Shot noise of the dark current accumulated over all TDI stages.
 
@@ -111,10 +114,10 @@ def dark_current_noise(dark_current, integration_time, tdi_stages=1.0):
     float or xr.DataArray
         [rms electrons]
     """
-    out = apply_kernel(_dark_current_noise_kernel, tdi_stages, dark_current, integration_time)
-    return named(out, "count", "dark current noise")
+    return apply_kernel(_dark_current_noise_kernel, tdi_stages, dark_current, integration_time)
 
 
+@contract(Output("quantization_noise", "count", "quantization noise"))
 def quantization_noise(well_range, bit_depth):
     r"""Quantization noise of an ADC spanning ``well_range`` electrons.
 
@@ -136,10 +139,10 @@ def quantization_noise(well_range, bit_depth):
 
     .. math:: \sigma_q = \frac{N_{range}}{\sqrt{12}\,(2^b - 1)}
     """
-    return named(apply_kernel(_quantization_noise_kernel, well_range, bit_depth), "count",
-                 "quantization noise")
+    return apply_kernel(_quantization_noise_kernel, well_range, bit_depth)
 
 
+@contract(Output("noise_gain", "1", "noise gain"))
 def noise_gain(kernel: xr.DataArray):
     r"""Noise gain of a post-processing kernel (Leachtenauer et al. 1997).
 
@@ -158,8 +161,7 @@ def noise_gain(kernel: xr.DataArray):
     The kernel's sum is checked (to 1e-9) where the sensor is built, not here
     with exact float equality: [0.7, 0.2, 0.1] sums to 0.9999999999999999.
     """
-    out = np.sqrt((kernel**2).sum(("kernel_y", "kernel_x")))
-    return named(out, "1", "noise gain")
+    return np.sqrt((kernel**2).sum(("kernel_y", "kernel_x")))
 
 
 def noise_gain_arrays(kernel):
@@ -167,6 +169,7 @@ def noise_gain_arrays(kernel):
     return np.sqrt(np.sum(kernel**2))
 
 
+@contract(Output("total_noise", "count", "total noise"))
 def total_noise(shot_variance, quantization, read, other):
     """Root-sum-square of the independent noise terms.
 
@@ -183,10 +186,10 @@ def total_noise(shot_variance, quantization, read, other):
     xr.DataArray
         [rms electrons]
     """
-    out = apply_kernel(_total_noise_kernel, shot_variance, quantization, read, other)
-    return named(out, "count", "total noise")
+    return apply_kernel(_total_noise_kernel, shot_variance, quantization, read, other)
 
 
+@contract(Output("stacked_snr", "1", "contrast signal-to-noise ratio"))
 def stacked_snr(snr, frame_stacks):
     """SNR after adding ``frame_stacks`` independent frames (grows as the square root).
 
@@ -202,8 +205,8 @@ def stacked_snr(snr, frame_stacks):
     xr.DataArray
         [1]
     """
-    return named(apply_kernel(_stacked_snr_kernel, frame_stacks, snr), "1",
-                 "contrast signal-to-noise ratio")
+    return apply_kernel(_stacked_snr_kernel, frame_stacks, snr)
+
 
 
 def noise_terms(signal: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:

@@ -21,6 +21,7 @@ import difflib
 import functools
 import inspect
 import math
+import numbers
 from dataclasses import dataclass
 from types import MappingProxyType
 
@@ -28,6 +29,7 @@ import numpy as np
 import xarray as xr
 
 from . import units
+from ._metadata import declared
 from .atmosphere.database import (  # the database's facts, re-exported where they bound inputs
     ALTITUDE_RANGE,
     GROUND_RANGE_RANGE,
@@ -39,7 +41,10 @@ from .atmosphere.database import (  # the database's facts, re-exported where th
 
 @dataclass(frozen=True)
 class Spec:
-    """Definition of one parameter: units, meaning and allowed interval."""
+    """Definition of one parameter: units, meaning and allowed interval.
+
+    ``whole`` restricts a plain knob (:meth:`check`) to whole numbers.
+    """
 
     units: str
     long_name: str
@@ -47,6 +52,7 @@ class Spec:
     high: float = math.inf
     low_open: bool = False
     high_open: bool = False
+    whole: bool = False
 
     def __post_init__(self):
         # an unbounded end is open: inf is never a valid parameter value
@@ -55,16 +61,31 @@ class Spec:
         if self.low == -math.inf:
             object.__setattr__(self, "low_open", True)
 
-    def describe(self) -> str:
-        """Human-readable allowed interval, e.g. ``(0, inf) m``."""
+    def interval(self) -> str:
+        """The allowed interval, e.g. ``(0, inf)`` (whole numbers as integers)."""
         left = "(" if self.low_open else "["
         right = ")" if self.high_open else "]"
-        return f"{left}{self.low:g}, {self.high:g}{right} {self.units}"
+        low, high = (f"{int(v)}" if self.whole and math.isfinite(v) else f"{v:g}"
+                     for v in (self.low, self.high))
+        return f"{left}{low}, {high}{right}"
+
+    def describe(self) -> str:
+        """Human-readable allowed interval, e.g. ``(0, inf) m``."""
+        return f"{self.interval()} {self.units}"
 
     def violated(self, values: np.ndarray) -> np.ndarray:
         """Boolean mask of values outside the interval (NaN counts as outside)."""
         return _outside(np.asarray(values, dtype=float), self.low, self.high, self.low_open,
                         self.high_open)
+
+    def check(self, name: str, value):
+        """``value`` if it is a plain real (whole, for ``whole``) number inside the interval."""
+        kind = numbers.Integral if self.whole else numbers.Real
+        if (not isinstance(value, kind) or isinstance(value, bool)
+                or bool(self.violated(value))):
+            number = "a whole number" if self.whole else "a real number"
+            raise ValueError(f"{name} must be {number} in {self.interval()}; got {value!r}")
+        return value
 
 
 def _outside(values, low, high, low_open, high_open) -> np.ndarray:
@@ -77,6 +98,220 @@ def _outside(values, low, high, low_open, high_open) -> np.ndarray:
 POSITIVE = {"low": 0.0, "low_open": True}
 NONNEGATIVE = {"low": 0.0}
 FRACTION = {"low": 0.0, "high": 1.0}
+
+
+# ---- declared contracts of public functions (xclim's declare_units, in Spec words) ----------
+# A public function carries its contract: one rule per checked argument (a Spec for a number,
+# or one of the rules below) and the declaration of what it returns. Each rule's ``check``
+# returns the value the function receives, or raises a one-line ValueError naming the
+# argument and what it allows.
+
+
+@dataclass(frozen=True)
+class Values:
+    """A physical argument (a float, an array or an eager DataArray) inside ``spec``'s interval.
+
+    NaN counts as outside; dask-backed values are not computed to be checked.
+    """
+
+    spec: Spec
+
+    def check(self, name: str, value):
+        """``value`` unchanged if every one of its values lies in the interval."""
+        if getattr(getattr(value, "data", None), "chunks", None) is not None:
+            return value
+        values = np.asarray(value, dtype=float)
+        mask = self.spec.violated(values)
+        if np.any(mask):
+            _raise(name, self.spec, values[mask].ravel()[0] if values.ndim else values)
+        return value
+
+
+@dataclass(frozen=True)
+class Choice:
+    """A knob that takes one of ``choices`` (strings, or None where None means "none")."""
+
+    choices: tuple
+
+    def check(self, name: str, value):
+        """``value`` if it is one of the choices."""
+        if not ((value is None or isinstance(value, str)) and value in self.choices):
+            raise ValueError(f"{name} must be one of {', '.join(map(repr, self.choices))}; "
+                             f"got {value!r}")
+        return value
+
+
+@dataclass(frozen=True)
+class Selection:
+    """A non-empty selection of ``choices`` (one name or several); None selects all of them."""
+
+    choices: tuple
+
+    def check(self, name: str, value) -> tuple:
+        """The chosen names as a tuple."""
+        if value is None:
+            return self.choices
+        chosen = (value,) if isinstance(value, str) else tuple(value)
+        if not chosen or any(c not in self.choices for c in chosen):
+            raise ValueError(f"{name} must be a non-empty selection of {self.choices}; "
+                             f"got {value!r}")
+        return chosen
+
+
+@dataclass(frozen=True)
+class Pair:
+    """A ``(low, high)`` pair of numbers inside ``spec``'s interval, returned as floats.
+
+    ``low < high`` (``low <= high`` when ``equal``); an infinite end of ``spec`` may be
+    reached (a range may be unbounded). ``optional``: None is allowed (no range).
+    """
+
+    spec: Spec
+    equal: bool = False
+    optional: bool = False
+
+    def check(self, name: str, value):
+        """``(low, high)`` as floats (None if optional and None)."""
+        if value is None and self.optional:
+            return None
+        try:
+            low, high = (float(v) for v in value)
+        except (TypeError, ValueError):
+            low = high = math.nan
+        spec = self.spec
+        inside = (math.isinf(v) or not spec.violated(v) for v in (low, high))
+        ordered = low <= high if self.equal else low < high
+        if not (ordered and all(inside) and low >= spec.low and high <= spec.high):
+            raise ValueError(
+                f"{name} must be {'None or ' if self.optional else ''}a (low, high) pair in "
+                f"{spec.describe()} with low {'<=' if self.equal else '<'} high; got {value!r}")
+        return low, high
+
+
+@dataclass(frozen=True)
+class Table:
+    """A lookup table ``(x values, y values)``, returned as two float arrays sorted by x.
+
+    At least two points, as many y as x, x finite and distinct, every y inside ``spec``'s
+    interval. ``x`` and ``y`` name the two halves in the errors.
+    """
+
+    x: str
+    y: str
+    spec: Spec
+
+    def check(self, name: str, value) -> tuple:
+        """``(x, y)`` as float arrays sorted by x."""
+        try:
+            xs, ys = (np.asarray(v, dtype=float).ravel() for v in value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} must be a pair ({self.x}, {self.y}); "
+                             f"got {value!r:.60}") from None
+        if xs.size < 2 or xs.size != ys.size:
+            raise ValueError(f"{name} table needs at least 2 {self.x} and as many {self.y}; "
+                             f"got {xs.size} and {ys.size}")
+        order = np.argsort(xs)
+        xs, ys = xs[order], ys[order]
+        if not (np.all(np.isfinite(xs)) and np.all(np.diff(xs) > 0)):
+            raise ValueError(f"{name} table {self.x} must be finite and distinct")
+        if np.any(self.spec.violated(ys)):
+            raise ValueError(f"{name} table {self.y} must lie in {self.spec.describe()}")
+        return xs, ys
+
+
+@dataclass(frozen=True)
+class Either:
+    """One of ``choice``'s names, or anything else that ``other`` accepts."""
+
+    choice: Choice
+    other: object  # a rule
+
+    def check(self, name: str, value):
+        """``value`` if a choice, else what ``other`` makes of it."""
+        if value is None or isinstance(value, str):
+            if value in self.choice.choices:
+                return value
+            raise ValueError(f"{name} must be one of {', '.join(map(repr, self.choice.choices))}"
+                             f" or a table; got {value!r}")
+        return self.other.check(name, value)
+
+
+@dataclass(frozen=True)
+class Instance:
+    """An object of type ``kind``; ``described`` says which in the error."""
+
+    kind: type
+    described: str
+
+    def check(self, name: str, value):
+        """``value`` if it is an instance of ``kind``."""
+        if not isinstance(value, self.kind):
+            raise ValueError(f"{name} must be {self.described}; got {type(value).__name__}")
+        return value
+
+
+@dataclass(frozen=True)
+class Resolved:
+    """An argument a function of the package resolves: a preset name or the object itself.
+
+    ``resolve(value)`` checks it, raising the error that names the argument.
+    """
+
+    resolve: object  # callable
+
+    def check(self, name: str, value):
+        """What ``value`` resolves to."""
+        return self.resolve(value)
+
+
+@dataclass(frozen=True)
+class Contract:
+    """What a public function checks on its arguments and declares of its result."""
+
+    rules: MappingProxyType
+    returns: object = None  # an xbsm._metadata.Output for a DataArray result, or None
+
+
+def contract(returns=None, **rules):
+    """Declare a public function's checked arguments and its output, and enforce them.
+
+    Parameters
+    ----------
+    returns : xbsm._metadata.Output, optional
+        Units and long name of a DataArray result (set on every call).
+    **rules : Spec, Values, Choice, Selection, Pair, Table, Either, Instance or Resolved
+        One per checked argument, by name; the function receives what the rule returns
+        (a Selection's tuple, a Pair's floats). Defaults are checked too.
+
+    The decorated function carries the declaration as ``__contract__`` (a
+    :class:`Contract`), so that documentation and tests can read it.
+    """
+    def decorate(func):
+        signature = inspect.signature(func)
+        positional = [name for name, p in signature.parameters.items()
+                      if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+        where = {name: (positional.index(name) if name in positional else None,
+                        signature.parameters[name].default) for name in rules}
+
+        @functools.wraps(func)
+        def checked(*args, **kwargs):
+            args = list(args)
+            for name, rule in rules.items():
+                position, default = where[name]
+                if name in kwargs:
+                    kwargs[name] = rule.check(name, kwargs[name])
+                elif position is not None and position < len(args):
+                    args[position] = rule.check(name, args[position])
+                elif default is not inspect.Parameter.empty:
+                    kwargs[name] = rule.check(name, default)
+            out = func(*args, **kwargs)
+            return out if returns is None else declared(out, returns)
+
+        checked.__contract__ = Contract(MappingProxyType(rules), returns)
+        return checked
+
+    return decorate
+
 
 SENSOR_SPECS: dict[str, Spec] = {
     "aperture_diameter": Spec("m", "effective aperture diameter", **POSITIVE),

@@ -22,6 +22,7 @@ import xarray as xr
 from ._kernels import apply_kernel, dataset
 from ._metadata import Output, declared, named, outputs
 from .constants import CODATA, Constants
+from .params import Choice, contract
 
 DATABASE_REFLECTANCE = 0.15
 """Target reflectance used in the MODTRAN database runs (paper Appendix A). [1]"""
@@ -30,6 +31,9 @@ GIQE_TARGET = MappingProxyType({"reflectance": 0.15, "temperature": 282.0})
 """GIQE standard target: 15% reflectance at 282 K (IBSM; Leachtenauer et al. 1997)."""
 GIQE_BACKGROUND = MappingProxyType({"reflectance": 0.07, "temperature": 280.0})
 """GIQE standard background: 7% reflectance at 280 K."""
+TARGETS = ("giqe", "scenario")
+"""Whose radiance :func:`aperture_radiances` gives: the GIQE standard target and background
+(:data:`GIQE_TARGET`, :data:`GIQE_BACKGROUND`) or the scenario's own."""
 EMISSIVE_BAND_START = 2.9e-6
 """Bands starting at or beyond this wavelength use the emissive GIQE target
 (reflectance 0, so only the 282 K / 280 K temperature contrast counts). [m]"""
@@ -187,7 +191,7 @@ def _interp_kernel(curve, target, *, source):
 
 # ---- the xarray boundary ------------------------------------------------------------
 
-def _apply(kernel, args, *, wavelength=None, curves=(), spectral=(True,), **knobs):
+def _apply(kernel, args, *, wavelength=None, spectral=(True,), **knobs):
     """Run a numpy kernel once over its arguments, broadcast and labelled as xarray would.
 
     Parameters
@@ -215,38 +219,29 @@ def _apply(kernel, args, *, wavelength=None, curves=(), spectral=(True,), **knob
         With the attributes of the first argument (callers name their results); inputs
         backed by dask give lazy dask results.
     """
-    curve_dims = {i: f"{name}_wavelength" for i, name in curves
-                  if f"{name}_wavelength" in getattr(args[i], "dims", ())}
-    core = [[curve_dims[i]] if i in curve_dims
-            else ["wavelength"] if "wavelength" in getattr(a, "dims", ()) else []
-            for i, a in enumerate(args)]
+    core = [["wavelength"] if "wavelength" in getattr(a, "dims", ()) else [] for a in args]
     if wavelength is None or not any(core):
         return apply_kernel(kernel, *args, outputs=[()] * len(spectral), **knobs)
-    sources = {i: args[i][dim].values for i, dim in curve_dims.items()}
 
     def over_wavelength(*arrays):
-        *arrays, target = arrays
-        return kernel(*(_interp_kernel(a, target, source=sources[i]) if i in sources
-                        else a if core[i] else np.asarray(a)[..., np.newaxis]
+        *arrays, _ = arrays
+        return kernel(*(a if core[i] else np.asarray(a)[..., np.newaxis]
                         for i, a in enumerate(arrays)), **knobs)
 
     out = apply_kernel(over_wavelength, *args, wavelength, core=[*core, ["wavelength"]],
                        outputs=[("wavelength",) if s else () for s in spectral])
-    order = _dimension_order(args, curve_dims)
+    order = _dimension_order(args)
     outs = tuple(o.transpose(*order) if s and o.dims != order else o
                  for o, s in zip(out if isinstance(out, tuple) else (out,), spectral,
                                  strict=True))
     return outs if len(outs) > 1 else outs[0]
 
 
-def _dimension_order(args, curve_dims):
-    """Dimensions in order of first appearance, a resampled curve's ``wavelength`` last."""
+def _dimension_order(args):
+    """Dimensions in order of first appearance, ``wavelength`` last if no argument has it."""
     order = {}
-    for i, a in enumerate(args):
-        dims = getattr(a, "dims", ())
-        if i in curve_dims:
-            dims = (*(d for d in dims if d != curve_dims[i]), "wavelength")
-        order.update(dict.fromkeys(dims))
+    for a in args:
+        order.update(dict.fromkeys(getattr(a, "dims", ())))
     order.setdefault("wavelength")
     return tuple(order)
 
@@ -258,6 +253,7 @@ def _planck_knobs(constants: Constants) -> dict:
 
 # ---- public functions ----------------------------------------------------------------
 
+@contract(Output("blackbody_radiance", "W m-2 sr-1 m-1", "blackbody spectral radiance"))
 def blackbody_radiance(wavelength, temperature, constants: Constants = CODATA):
     r"""Blackbody spectral radiance (Planck's law).
 
@@ -283,10 +279,10 @@ def blackbody_radiance(wavelength, temperature, constants: Constants = CODATA):
     IBSM Eq. 3-35. Written with :math:`e^{-x}` so that it underflows
     gracefully to 0 instead of overflowing when :math:`\lambda T` is small.
     """
-    out = _apply(_blackbody_kernel, (wavelength, temperature), **_planck_knobs(constants))
-    return named(out, "W m-2 sr-1 m-1", "blackbody spectral radiance")
+    return _apply(_blackbody_kernel, (wavelength, temperature), **_planck_knobs(constants))
 
 
+@contract(Output("total_radiance", "W m-2 sr-1 m-1", "spectral radiance at the aperture"))
 def total_radiance(atmosphere: xr.Dataset, reflectance, temperature, constants=CODATA):
     r"""Spectral radiance at the aperture from a Lambertian target (paper Eq. 1).
 
@@ -319,9 +315,10 @@ def total_radiance(atmosphere: xr.Dataset, reflectance, temperature, constants=C
     out = _apply(_total_radiance_kernel, (
         a["path_thermal"], reflectance, a["wavelength"], temperature, a["transmission"],
         a["solar_scatter"], a["ground_reflected"]), **_planck_knobs(constants))
-    return named(out, "W m-2 sr-1 m-1", "spectral radiance at the aperture")
+    return out
 
 
+@contract(Output("path_radiance", "W m-2 sr-1 m-1", "path spectral radiance"))
 def path_radiance(atmosphere: xr.Dataset):
     """Spectral radiance added by the path: thermal emission plus scattered sunlight.
 
@@ -335,8 +332,7 @@ def path_radiance(atmosphere: xr.Dataset):
     xr.DataArray
         Path spectral radiance. [W m-2 sr-1 m-1]
     """
-    out = atmosphere["path_thermal"] + atmosphere["solar_scatter"]
-    return named(out, "W m-2 sr-1 m-1", "path spectral radiance")
+    return atmosphere["path_thermal"] + atmosphere["solar_scatter"]
 
 
 def is_emissive_band(wavelength_min) -> bool:
@@ -344,6 +340,7 @@ def is_emissive_band(wavelength_min) -> bool:
     return bool(wavelength_min >= EMISSIVE_BAND_START)
 
 
+@contract(Output("giqe_radiance", "W m-2 sr-1 m-1", "GIQE standard spectral radiance"))
 def giqe_radiance(atmosphere: xr.Dataset, standard: dict, emissive: bool, constants=CODATA):
     """Aperture radiance of a GIQE standard surface (target or background).
 
@@ -364,10 +361,10 @@ def giqe_radiance(atmosphere: xr.Dataset, standard: dict, emissive: bool, consta
         [W m-2 sr-1 m-1]
     """
     reflectance = 0.0 if emissive else standard["reflectance"]
-    out = total_radiance(atmosphere, reflectance, standard["temperature"], constants)
-    return named(out, "W m-2 sr-1 m-1", "GIQE standard spectral radiance")
+    return total_radiance(atmosphere, reflectance, standard["temperature"], constants)
 
 
+@contract(Output("throughput_factor", "sr", "focal-plane throughput factor"))
 def throughput_factor(aperture_diameter, focal_length):
     """Projected solid angle of the optics seen from the focal plane, pi / (1 + 4 F^2).
 
@@ -387,10 +384,10 @@ def throughput_factor(aperture_diameter, focal_length):
     -----
     Schott's form of IBSM Eq. 3-34, valid for fast optics too (paper Eq. 2).
     """
-    out = _apply(_throughput_kernel, (focal_length, aperture_diameter))
-    return named(out, "sr", "focal-plane throughput factor")
+    return _apply(_throughput_kernel, (focal_length, aperture_diameter))
 
 
+@contract(Output("focal_plane_irradiance", "W m-2 m-1", "focal-plane spectral irradiance"))
 def focal_plane_irradiance(radiance, aperture_diameter, focal_length):
     r"""Focal-plane spectral irradiance from a radiance filling the pupil.
 
@@ -410,10 +407,10 @@ def focal_plane_irradiance(radiance, aperture_diameter, focal_length):
     -----
     .. math:: E = L\,\frac{\pi}{1 + 4 (f/D)^2}
     """
-    out = _apply(_focal_plane_kernel, (radiance, focal_length, aperture_diameter))
-    return named(out, "W m-2 m-1", "focal-plane spectral irradiance")
+    return _apply(_focal_plane_kernel, (radiance, focal_length, aperture_diameter))
 
 
+@contract(Output("cold_shield_self_emission", "W m-2 m-1", "cold shield self-emission irradiance"))
 def cold_shield_self_emission(wavelength, cold_shield_temperature, aperture_diameter,
                               focal_length, constants=CODATA):
     r"""Focal-plane irradiance from the cold shield outside the optics' cone.
@@ -440,9 +437,10 @@ def cold_shield_self_emission(wavelength, cold_shield_temperature, aperture_diam
     """
     out = _apply(_cold_shield_kernel, (focal_length, aperture_diameter, wavelength,
                                        cold_shield_temperature), **_planck_knobs(constants))
-    return named(out, "W m-2 m-1", "cold shield self-emission irradiance")
+    return out
 
 
+@contract(Output("cold_stop_self_emission", "W m-2 m-1", "cold stop self-emission irradiance"))
 def cold_stop_self_emission(wavelength, cold_filter_temperature, cold_filter_emissivity,
                             aperture_diameter, focal_length, constants=CODATA):
     """Focal-plane irradiance emitted by the cold filter / cold stop.
@@ -468,9 +466,10 @@ def cold_stop_self_emission(wavelength, cold_filter_temperature, cold_filter_emi
     out = _apply(_cold_stop_kernel, (cold_filter_emissivity, wavelength, cold_filter_temperature,
                                      focal_length, aperture_diameter),
                  **_planck_knobs(constants))
-    return named(out, "W m-2 m-1", "cold stop self-emission irradiance")
+    return out
 
 
+@contract(Output("optics_self_emission", "W m-2 m-1", "optics self-emission irradiance"))
 def optics_self_emission(wavelength, optics_temperature, optics_emissivity,
                          cold_filter_transmission, aperture_diameter, focal_length,
                          constants=CODATA):
@@ -497,9 +496,10 @@ def optics_self_emission(wavelength, optics_temperature, optics_emissivity,
     out = _apply(_optics_emission_kernel, (cold_filter_transmission, optics_emissivity,
                                            wavelength, optics_temperature, focal_length,
                                            aperture_diameter), **_planck_knobs(constants))
-    return named(out, "W m-2 m-1", "optics self-emission irradiance")
+    return out
 
 
+@contract(Output("photon_detection_rate", "s-1 m-1", "spectral photoelectron rate"))
 def photon_detection_rate(irradiance, quantum_efficiency, detector_width_x,
                           detector_width_y, constants=CODATA):
     r"""Spectral photoelectron generation rate of one detector (IBSM Eq. 3-42).
@@ -527,7 +527,7 @@ def photon_detection_rate(irradiance, quantum_efficiency, detector_width_x,
     out = _apply(_photon_rate_kernel, (irradiance["wavelength"], quantum_efficiency,
                                        detector_width_x, detector_width_y, irradiance),
                  h=constants.planck, c=constants.speed_of_light)
-    return named(out, "s-1 m-1", "spectral photoelectron rate")
+    return out
 
 
 def band_integral(spectral: xr.DataArray) -> xr.DataArray:
@@ -556,6 +556,7 @@ def band_integral(spectral: xr.DataArray) -> xr.DataArray:
     return named(out, units, f"band-integrated {spectral.attrs.get('long_name', 'quantity')}")
 
 
+@contract(Output("dark_current", "s-1", "dark current"))
 def dark_current_from_density(dark_current_density, detector_width_x, detector_width_y,
                               constants=CODATA):
     """Dark current of one detector from a dark current density.
@@ -574,10 +575,10 @@ def dark_current_from_density(dark_current_density, detector_width_x, detector_w
     float or xr.DataArray
         Dark current. [electrons/s]
     """
-    out = dark_current_density * detector_width_x * detector_width_y / constants.elementary_charge
-    return named(out, "s-1", "dark current")
+    return dark_current_density * detector_width_x * detector_width_y / constants.elementary_charge
 
 
+@contract(Output("well_fill_scale", "1", "well-fill integration time scale"))
 def well_fill_scale(photoelectrons, max_well, max_well_fill):
     """Factor (<= 1) that shortens the integration so the well stays below its fill limit.
 
@@ -595,8 +596,7 @@ def well_fill_scale(photoelectrons, max_well, max_well_fill):
     xr.DataArray
         Scale factor for integration time and counts. [1]
     """
-    out = _apply(_well_fill_kernel, (photoelectrons, max_well_fill, max_well))
-    return named(out, "1", "well-fill integration time scale")
+    return _apply(_well_fill_kernel, (photoelectrons, max_well_fill, max_well))
 
 
 def resample_spectral(values, wavelength: xr.DataArray, name: str):
@@ -638,6 +638,7 @@ def resample_spectral(values, wavelength: xr.DataArray, name: str):
     return out
 
 
+@contract(targets=Choice(TARGETS))
 def aperture_radiances(atmosphere: xr.Dataset, scenario: xr.Dataset, targets: str,
                        wavelength_min, constants=CODATA):
     """Aperture radiance of the target and of its background (paper Eq. 1).
@@ -685,21 +686,23 @@ def sensor_band_terms(sensor: xr.Dataset, wavelength: xr.DataArray,
         shield, optics and cold stop, plus stray light) [W m-2 m-1] (paper Eq. 2).
     """
     s = sensor
+    curves = {name: resample_spectral(s[name], wavelength, name)  # once each, here
+              for name in ("optics_transmission", "quantum_efficiency", "stray_irradiance")}
     optics = _apply(_optics_transmission_kernel, (
-        s["cold_filter_transmission"], s["obscuration_ratio"], s["optics_transmission"]),
-        wavelength=wavelength, curves=[(2, "optics_transmission")])
+        s["cold_filter_transmission"], s["obscuration_ratio"], curves["optics_transmission"]),
+        wavelength=wavelength)
     sensor_irradiance = _apply(_sensor_irradiance_kernel, (
         s["focal_length"], s["aperture_diameter"], wavelength, s["cold_shield_temperature"],
         s["cold_filter_transmission"], s["optics_emissivity"], s["optics_temperature"],
-        s["cold_filter_emissivity"], s["cold_filter_temperature"], s["stray_irradiance"]),
-        wavelength=wavelength, curves=[(9, "stray_irradiance")], **_planck_knobs(constants))
+        s["cold_filter_emissivity"], s["cold_filter_temperature"], curves["stray_irradiance"]),
+        wavelength=wavelength, **_planck_knobs(constants))
     values = {"optics_transmission": optics,
-              "quantum_efficiency": resample_spectral(s["quantum_efficiency"], wavelength,
-                                                      "quantum_efficiency"),
+              "quantum_efficiency": curves["quantum_efficiency"],
               "sensor_irradiance": sensor_irradiance}
     return dataset({name: declared(values[name], o) for name, o in BAND_OUTPUTS.items()})
 
 
+@contract(Output("detector_irradiance", "W m-2 m-1", "focal-plane spectral irradiance"))
 def detector_irradiance(radiance, band: xr.Dataset, sensor: xr.Dataset):
     """Focal-plane spectral irradiance from a scene radiance plus the sensor's own (Eq. 2).
 
@@ -720,7 +723,7 @@ def detector_irradiance(radiance, band: xr.Dataset, sensor: xr.Dataset):
     out = _apply(_detector_irradiance_kernel, (
         band["optics_transmission"], radiance, sensor["focal_length"],
         sensor["aperture_diameter"], band["sensor_irradiance"]))
-    return named(out, "W m-2 m-1", "focal-plane spectral irradiance")
+    return out
 
 
 def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,

@@ -15,14 +15,13 @@ Frequencies are in cycles per pixel along that normal.
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 import xarray as xr
 from scipy.interpolate import CubicSpline
 
 from .._metadata import named
 from ..metrics.edge import RER_POSITIONS
+from ..params import Choice, Spec, contract
 from ._edge_fit import (
     MAX_EDGE_ANGLE,
     MIN_EDGE_ANGLE,
@@ -72,17 +71,6 @@ CLIPPED_ROW_FRACTION = 0.5
 CLIP_MARGIN = 0.5
 """Distance beyond the edge's 10-90 % rise still searched for clipped pixels (half a
 pixel: a pixel straddling the end of the rise). [pixel]"""
-
-
-def _check_knobs(oversampling, window, method):
-    if (not isinstance(oversampling, numbers.Integral) or isinstance(oversampling, bool)
-            or oversampling < 1):
-        raise ValueError(f"oversampling must be a positive integer (1, 2, ...; ISO uses 4); "
-                         f"got {oversampling!r}")
-    if window not in WINDOWS:
-        raise ValueError(f"window must be one of {WINDOWS}; got {window!r}")
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}; got {method!r}")
 
 
 def _check_size(image):
@@ -236,6 +224,9 @@ def _edge_dataset(results, image, shape, knobs):
     return out
 
 
+@contract(oversampling=Spec("1", "bins per pixel of the edge spread function", low=1.0,
+                            whole=True),
+          window=Choice(WINDOWS), method=Choice(METHODS))
 def slanted_edge_mtf(image, *, roi=None, oversampling=4, window="hamming",
                      method="accurate") -> xr.Dataset:
     r"""MTF of an imaging system measured on a slanted edge (ISO 12233 e-SFR).
@@ -291,7 +282,6 @@ def slanted_edge_mtf(image, *, roi=None, oversampling=4, window="hamming",
     mean from its mean distance, sharpens the ESF with the 3-tap inverse of the
     box, :math:`[-1, 26, -1]/24`, and divides the MTF by what remains.
     """
-    _check_knobs(oversampling, window, method)
     img = select(as_image(image, "image"), roi, "roi")
     _check_size(img)
     values = finite_values(img, "image")

@@ -22,6 +22,7 @@ from xbsm import flags as _flags
 
 from .._kernels import apply_kernel, dataset
 from .._metadata import Output, declared, named, outputs
+from ..params import Instance, Pair, Spec, contract
 
 __all__ = [
     "GIQE_VERSIONS",
@@ -111,47 +112,35 @@ class GiqeCalibration:
     q: tuple | None = None
 
     def __post_init__(self):
-        for name in _RANGE_FIELDS:
-            object.__setattr__(self, name, _check_range(name, getattr(self, name)))
+        for name, rule in RANGE_RULES.items():
+            object.__setattr__(self, name, rule.check(name, getattr(self, name)))
         if not isinstance(self.source, str):
             raise ValueError(f"source must be a str; got {type(self.source).__name__}")
 
     def replace(self, **changes) -> GiqeCalibration:
         """A copy with some ranges changed (validated like the constructor)."""
-        unknown = sorted(set(changes) - set(_RANGE_FIELDS) - {"source"})
+        unknown = sorted(set(changes) - set(RANGE_RULES) - {"source"})
         if unknown:
             raise ValueError(
                 f"unknown GiqeCalibration field(s) {unknown}; fields are "
-                f"{', '.join(_RANGE_FIELDS)}, source"
+                f"{', '.join(RANGE_RULES)}, source"
             )
         return dataclasses.replace(self, **changes)
 
 
-_RANGE_FIELDS = ("snr", "rer", "gsd", "elevation", "niirs", "gsd_ground_plane", "q")
-_RANGE_UNITS = MappingProxyType({"snr": "[1]", "rer": "[1]", "gsd": "[m]", "elevation": "[rad]",
-                                 "niirs": "[1]", "gsd_ground_plane": "[m]", "q": "[1]"})
-
-
-def _check_range(name, value):
-    """Validate one calibration range; return it as a pair of floats (or None)."""
-    if value is None:
-        return None
-    form = (f"{name} must be None or a (low, high) pair of numbers {_RANGE_UNITS[name]} "
-            f"with low <= high")
-    try:
-        lo, hi = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{form}; got {value!r}") from None
-    if np.isnan(lo) or np.isnan(hi) or lo > hi:
-        raise ValueError(f"{form}; got {value!r}")
-    if name == "elevation" and not (0.0 <= lo and hi <= np.pi / 2 + 1e-12):
-        raise ValueError(
-            f"elevation must be a (low, high) pair in radians within [0, pi/2], e.g. "
-            f"(np.deg2rad(25), np.pi / 2); got {value!r}"
-        )
-    if name in ("snr", "rer", "gsd", "gsd_ground_plane", "q") and lo < 0:
-        raise ValueError(f"{form} and low >= 0; got {value!r}")
-    return (lo, hi)
+#: The declared rule of each calibration range (params words): None, or a (low, high) pair
+#: with low <= high inside the quantity's own interval (the elevation in radians, up to
+#: pi/2 and its rounding).
+RANGE_RULES = MappingProxyType({
+    name: Pair(spec, equal=True, optional=True) for name, spec in {
+        "snr": Spec("1", "contrast SNR", low=0.0),
+        "rer": Spec("1", "relative edge response", low=0.0),
+        "gsd": Spec("m", "ground sample distance", low=0.0),
+        "elevation": Spec("rad", "elevation angle", 0.0, np.pi / 2 + 1e-12),
+        "niirs": Spec("1", "NIIRS"),
+        "gsd_ground_plane": Spec("m", "ground-plane GSD", low=0.0),
+        "q": Spec("1", "sampling ratio Q", low=0.0),
+    }.items()})
 
 
 # Each limit below has its source on the line before it. "Unverified" means
@@ -253,13 +242,8 @@ def giqe_calibrations(calibration=None):
     return MappingProxyType(out)
 
 
-def _check_calibration(calibration):
-    if not isinstance(calibration, GiqeCalibration):
-        raise ValueError(
-            "calibration must be an xbsm.metrics.GiqeCalibration (e.g. "
-            f"GIQE5_CALIBRATION.replace(...)); got {type(calibration).__name__}"
-        )
-    return calibration
+_CALIBRATION = Instance(GiqeCalibration, "an xbsm.metrics.GiqeCalibration (e.g. "
+                        "GIQE5_CALIBRATION.replace(...))")
 
 
 # ---------------------------------------------------------------------------- kernels
@@ -384,12 +368,14 @@ def _dims_in_order(*dims):
     return tuple(dict.fromkeys(d for group in dims for d in group))
 
 
-def _version_tests(calibration, values, version=0, niirs_column=None):
+def _version_tests(calibration, values, version=0, niirs_column=None, q_per_orientation=None):
     """The arrays one GIQE version's flags test, and the tests, in :func:`giqe_flags`'s order.
 
     ``values`` maps snr, rer, gsd, gsd_ground_plane, elevation, q and niirs to DataArrays
-    (or None: not tested). Returns (arrays, tests) with tests as :func:`_flags_kernel`
-    takes them, the array index standing for an entry of ``arrays``.
+    (or None: not tested). ``q`` is tested over its orientations (any outside) when it has
+    an ``orientation`` dim, or when ``q_per_orientation`` says so for a plain array.
+    Returns (arrays, tests) with tests as :func:`_flags_kernel` takes them, the array
+    index standing for an entry of ``arrays``.
     """
     checks = [("snr_nonpositive", "snr", "nonpositive", (0.0, 0.0)),
               ("rer_nonpositive", "rer", "not_positive", (0.0, 0.0))]
@@ -399,7 +385,9 @@ def _version_tests(calibration, values, version=0, niirs_column=None):
                       ("niirs_out_of_scale", "niirs")):
         lo_hi = getattr(calibration, key)
         if values.get(key) is not None and lo_hi is not None:
-            kind = "any_outside" if key == "q" and "orientation" in values[key].dims else "outside"
+            per_orientation = (q_per_orientation if q_per_orientation is not None
+                               else "orientation" in getattr(values[key], "dims", ()))
+            kind = "any_outside" if key == "q" and per_orientation else "outside"
             checks.append((name, key, kind, lo_hi))
     arrays, tests = [], []
     for name, key, kind, (lo, hi) in checks:
@@ -428,6 +416,7 @@ def _label_flags(arrays, tests, versions=None, long_name="GIQE validity flags"):
     return out
 
 
+@contract(Output("q", "1", "sampling ratio Q = lambda N / p"))
 def sampling_q(wavelength, aperture_diameter, ifov):
     r"""Sampling ratio Q of an optics and detector: wavelength x f-number / pixel pitch.
 
@@ -451,10 +440,10 @@ def sampling_q(wavelength, aperture_diameter, ifov):
 
     NGA GIQE 5 report (2015), which assumes 1 <= Q <= 2.
     """
-    q = apply_kernel(_sampling_q_kernel, _da(wavelength), _da(aperture_diameter), _da(ifov))
-    return named(q, "1", "sampling ratio Q = lambda N / p")
+    return apply_kernel(_sampling_q_kernel, _da(wavelength), _da(aperture_diameter), _da(ifov))
 
 
+@contract(calibration=_CALIBRATION)
 def giqe_flags(*, snr, rer, gsd, elevation=None, niirs=None, calibration=GIQE4_CALIBRATION,
                gsd_ground_plane=None, q=None):
     """Flag GIQE inputs and predictions outside a calibration.
@@ -491,13 +480,13 @@ def giqe_flags(*, snr, rer, gsd, elevation=None, niirs=None, calibration=GIQE4_C
         range that is ``None`` in ``calibration``, or whose quantity is not
         given, is not tested.
     """
-    cal = _check_calibration(calibration)
     values = {"snr": snr, "rer": rer, "gsd": gsd, "gsd_ground_plane": gsd_ground_plane,
               "elevation": elevation, "q": q, "niirs": niirs}
     values = {key: None if value is None else _da(value) for key, value in values.items()}
-    return _label_flags(*_version_tests(cal, values))
+    return _label_flags(*_version_tests(calibration, values))
 
 
+@contract(calibration=_CALIBRATION)
 def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
           elevation=None):
     r"""NIIRS from the General Image Quality Equation version 3.
@@ -534,7 +523,6 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
 
         NIIRS = 11.81 + 3.32\log_{10}\frac{RER}{GSD} - 1.48\,EHO - \frac{G}{SNR}
     """
-    _check_calibration(calibration)
     rer, gsd, eho, snr, noise_gain = map(_da, (rer, gsd, eho, snr, noise_gain))
     niirs = named(apply_kernel(_giqe3_kernel, rer, gsd, eho, noise_gain, snr), "1",
                   "NIIRS (GIQE 3)", references=GIQE_REFERENCES[3])
@@ -543,6 +531,7 @@ def giqe3(*, rer, gsd, eho, snr, noise_gain=1.0, calibration=GIQE3_CALIBRATION,
     return dataset({"niirs": niirs, "flags": _label_flags(*_version_tests(calibration, values))})
 
 
+@contract(calibration=_CALIBRATION)
 def giqe4(
     *,
     rer,
@@ -597,7 +586,6 @@ def giqe4(
     with (a, b) = (3.32, 1.559) for RER >= 0.9 and (3.16, 2.817) otherwise
     (a 0.11 NIIRS step at RER = 0.9 is part of the published fit).
     """
-    _check_calibration(calibration)
     rer, gsd, eho, snr, elevation, noise_gain = map(
         _da, (rer, gsd, eho, snr, elevation, noise_gain)
     )
@@ -611,6 +599,8 @@ def giqe4(
     return dataset({"niirs": niirs, "gsd_gp": gsd_gp, "flags": fl})
 
 
+@contract(Output("rer_giqe5", "1", "GIQE 5 weighted relative edge response",
+                 references=_RER5_REFERENCE))
 def giqe5_rer(rer_x, rer_y):
     r"""GIQE 5 combined RER of two orthogonal axes.
 
@@ -630,11 +620,10 @@ def giqe5_rer(rer_x, rer_y):
 
     .. math:: RER = \left(\max(R_x, R_y)\,\min(R_x, R_y)^2\right)^{1/3}
     """
-    out = apply_kernel(_giqe5_rer_kernel, _da(rer_x), _da(rer_y))
-    return named(out, "1", "GIQE 5 weighted relative edge response",
-                 references=_RER5_REFERENCE)
+    return apply_kernel(_giqe5_rer_kernel, _da(rer_x), _da(rer_y))
 
 
+@contract(calibration=_CALIBRATION)
 def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q=None):
     r"""NIIRS from the NGA General Image Quality Equation version 5.
 
@@ -675,7 +664,6 @@ def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q
                 + 3.32\,(1 - e^{-1.9/SNR})\log_{10}RER
                 - 2\,(\log_{10}RER)^4 - 1.8/SNR
     """
-    _check_calibration(calibration)
     rer_x, rer_y, gsd, snr, elevation = map(_da, (rer_x, rer_y, gsd, snr, elevation))
     rer = giqe5_rer(rer_x, rer_y)
     gsd_w = named(apply_kernel(_ground_plane_kernel, gsd, elevation, power=0.25), "m",
@@ -804,20 +792,19 @@ def giqe_arrays(*, rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_g
                                      rer_x, rer_y, noise_coefficient=noise_coefficient)
     gsd5_gp = (None if calibration[5].gsd_ground_plane is None
                else _ground_plane_kernel(gsd_x, elevation, power=0.5))
-    q = xr.Variable("orientation", q)  # its test runs over orientation
     tested = (
         {"snr": snr, "rer": rer, "gsd": gsd, "elevation": elevation, "niirs": niirs},
         {"snr": snr, "rer": rer, "gsd": gsd_gp, "elevation": elevation, "niirs": niirs},
         {"snr": snr, "rer": rer5, "gsd": gsd_w, "gsd_ground_plane": gsd5_gp,
          "elevation": elevation, "q": q, "niirs": niirs})
-    arrays, tests, _ = _tests_by_version(calibration, tested)
-    flags = _flags_kernel(*(np.asarray(getattr(a, "values", a)) for a in arrays),
+    arrays, tests, _ = _tests_by_version(calibration, tested, q_per_orientation=True)
+    flags = _flags_kernel(*(np.asarray(a) for a in arrays),
                           tests=tests, versions=len(GIQE_VERSIONS))
     return {"niirs": niirs, "flags": flags, "rer_giqe5": rer5, "gsd": gsd, "gsd_gp": gsd_gp,
             "gsd_w": gsd_w, "noise_gain": noise_gain}
 
 
-def _tests_by_version(calibration, tested):
+def _tests_by_version(calibration, tested, q_per_orientation=None):
     """Every GIQE version's tested arrays and tests, numbered for one :func:`_flags_kernel`.
 
     ``tested[i]`` holds what version ``GIQE_VERSIONS[i]`` tests (its NIIRS being column i
@@ -825,7 +812,8 @@ def _tests_by_version(calibration, tested):
     """
     arrays, tests, versions = [], [], []
     for i, (version, values) in enumerate(zip(GIQE_VERSIONS, tested, strict=True)):
-        version_arrays, version_tests = _version_tests(calibration[version], values, i, i)
+        version_arrays, version_tests = _version_tests(calibration[version], values, i, i,
+                                                       q_per_orientation)
         tests += [(*t[:5], t[5] + len(arrays), t[6]) for t in version_tests]
         arrays += version_arrays
         versions += [i] * len(version_arrays)

@@ -12,7 +12,8 @@ import numpy as np
 import xarray as xr
 
 from .. import flags as _flags
-from .._metadata import named
+from .._metadata import Output
+from ..params import Choice, Spec, Values, contract
 from .edge import check_slice
 from .pybsm_numerics import np_interp_reversed
 
@@ -49,6 +50,10 @@ def _grd_flags(snr: xr.DataArray) -> xr.DataArray:
     return flags.assign_attrs(_flags.flag_attrs("GRD validity flags"))
 
 
+@contract(Output("grd", "m", "ground resolved distance", references="IBSM Eq. 3-54"),
+          ifov=Values(Spec("rad", "instantaneous field of view", low=0.0)),
+          slant_range=Values(Spec("m", "slant range", low=0.0, low_open=True)),
+          method=Choice(("first_crossing", "pybsm")))
 def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first_crossing"):
     r"""Ground resolved distance: period of the finest resolvable square wave.
 
@@ -94,10 +99,6 @@ def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first
     check_slice(otf_slice, None)
     if not np.all(np.diff(np.asarray(otf_slice["frequency"].values)) > 0):
         raise ValueError("otf_slice's frequency coordinate must increase strictly")
-    if not np.all(np.asarray(ifov) >= 0):
-        raise ValueError(f"ifov must lie in [0, inf) rad; got {ifov!r:.60}")
-    if not np.all(np.asarray(slant_range) > 0):
-        raise ValueError(f"slant_range must lie in (0, inf) m; got {slant_range!r:.60}")
     mtf = np.abs(otf_slice.reset_coords(drop=True))
     freq = otf_slice["frequency"].reset_coords(drop=True)
     freq = xr.DataArray(np.asarray(freq), dims="frequency", coords={"frequency": freq.values})
@@ -111,13 +112,10 @@ def ground_resolved_distance(otf_slice, snr, ifov, slant_range, *, method="first
         with np.errstate(divide="ignore"):
             grd = slant_range * np.maximum(1.0 / u_r, 2.0 * ifov)
         grd = grd.where(snr > 0)  # pyBSM raises at SNR 0; no SNR <= 0 resolves anything
-    elif method == "first_crossing":
+    else:  # "first_crossing"
         u_r = _first_crossing(mtf, freq, threshold)
         with np.errstate(divide="ignore"):
             inv = xr.where(u_r > 0, 1.0 / u_r.where(u_r > 0), np.inf)
         grd = slant_range * np.maximum(inv, 2.0 * ifov)
         grd = grd.where(snr > 0)
-    else:
-        raise ValueError(f"method must be 'first_crossing' or 'pybsm', got {method!r}")
-    grd = grd.assign_coords(grd_flags=_grd_flags(snr))
-    return named(grd, "m", "ground resolved distance", references="IBSM Eq. 3-54")
+    return grd.assign_coords(grd_flags=_grd_flags(snr))

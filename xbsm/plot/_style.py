@@ -150,39 +150,28 @@ class Context:
 
 
 def context_of(ds: xr.Dataset) -> Context:
-    """Title lines (study title, fixed parameters, method) and the MTF frequencies."""
-    study = study_of(ds)
-    lines = [str(ds.attrs["title"])] if ds.attrs.get("title") else []
-    fixed = []
-    if study is not None:
-        from ..params import SCENARIO_SPECS, SENSOR_SPECS
+    """Title lines (study title, fixed parameters, method) and the MTF frequencies.
 
-        fixed += [f"{words(k)} {with_unit(v, SCENARIO_SPECS[k].units)}"
-                  for k, v in study.scenario.items() if np.ndim(v) == 0]
-        fixed += [f"{text} {with_unit(study.sensor[k], SENSOR_SPECS[k].units)}"
-                  for k, text in _KEY_SENSOR.items() if k in study.sensor and k not in ds.coords]
-        if "band" not in ds.dims and {"wavelength_min", "wavelength_max"} <= set(study.sensor):
-            fixed.append(f"band {study.sensor['wavelength_min'] * 1e9:.0f}-"
-                         f"{study.sensor['wavelength_max'] * 1e9:.0f}\u00a0nm")
+    The fixed parameters are those a study result records in its attributes
+    (:mod:`xbsm.study.attributes`); a result without them gets no such line.
+    """
+    from ..params import SCENARIO_SPECS, SENSOR_SPECS
+    from ..study.attributes import parameters_of
+
+    sensor, scenario = parameters_of(ds)
+    lines = [str(ds.attrs["title"])] if ds.attrs.get("title") else []
+    fixed = [f"{words(k)} {with_unit(v, SCENARIO_SPECS[k].units)}" for k, v in scenario.items()]
+    fixed += [f"{text} {with_unit(sensor[k], SENSOR_SPECS[k].units)}"
+              for k, text in _KEY_SENSOR.items() if k in sensor and k not in ds.coords]
+    if "band" not in ds.dims and {"wavelength_min", "wavelength_max"} <= set(sensor):
+        fixed.append(f"band {sensor['wavelength_min'] * 1e9:.0f}-"
+                     f"{sensor['wavelength_max'] * 1e9:.0f}\u00a0nm")
     if ds.attrs.get("xbsm_method"):
         fixed.append(f"method {ds.attrs['xbsm_method']}")
     if fixed:
         lines.append(", ".join(fixed))
     frequency = ds["frequency"].values if "frequency" in ds.coords else None
     return Context("\n".join(lines), frequency)
-
-
-def study_of(ds: xr.Dataset):
-    """The study a result was made from (its ``xbsm_study`` attribute), if it still parses."""
-    text = ds.attrs.get("xbsm_study")
-    if not text:
-        return None
-    from ..study import StudyError, parse
-
-    try:
-        return parse(str(text), "the result's xbsm_study attribute")
-    except StudyError:
-        return None
 
 
 def set_suptitle(fig, text: str) -> None:

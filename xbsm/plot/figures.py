@@ -40,7 +40,6 @@ from ._style import (
     Context,
     context_of,
     set_suptitle,
-    study_of,
     value_label,
     with_unit,
     words,
@@ -122,7 +121,8 @@ def _noise_figure(ds: xr.Dataset, ctx: Context):
     axes = fig.subplots(1, len(bands), squeeze=False, sharey=True)[0]
     for ax, band in zip(axes, bands, strict=True):
         pick = {**selector, **({"band": band} if band is not None else {})}
-        point = _split_self_emission(ds.isel({d: i for d, i in pick.items() if d in ds.dims}))
+        point = _split_self_emission(ds.isel({d: i for d, i in pick.items() if d in ds.dims}),
+                                     band)
         noise_panel(ax, point, {})
         if band is not None:
             ax.set_title(value_label(ds, "band", band), fontsize="medium")
@@ -135,27 +135,25 @@ def _noise_figure(ds: xr.Dataset, ctx: Context):
 
 
 
-def _split_self_emission(point: xr.Dataset) -> xr.Dataset:
+def _split_self_emission(point: xr.Dataset, band: int | None) -> xr.Dataset:
     """One scenario of a study result with its self-emission noise split by source.
 
-    The sensor is rebuilt from the result's study (``xbsm_study``) at this scenario
-    (its band and swept values); without a study that still parses, ``point`` as is.
+    The sensor is rebuilt from the parameters the result records in its attributes
+    (:mod:`xbsm.study.attributes`, those of the band at position ``band``) and the
+    swept values at this scenario; without them (a result written before they
+    existed) or if they no longer make a sensor, ``point`` as is.
     """
-    study = study_of(point)
-    if study is None or "self_emission_noise" not in point:
-        return point
     from .. import params
+    from ..study.attributes import parameters_of
     from ..study.spec import SENSOR_PARAMETERS
 
-    values = {**study.sensor}
-    if "band" in point.coords and study.bands:
-        values.update(study.bands[str(point["band"].values)])
-    for sweep in study.sweeps:
-        for name in sweep.values:
-            if name in SENSOR_PARAMETERS and name in point.coords:
-                values[name] = float(point[name])
+    values, _ = parameters_of(point, band)
+    if not values or "self_emission_noise" not in point:
+        return point
+    values.update({name: float(point[name]) for name in SENSOR_PARAMETERS
+                   if name in point.coords and point[name].ndim == 0})
     try:
-        sensor = params.sensor(**{k: v for k, v in values.items() if k in SENSOR_PARAMETERS})
+        sensor = params.sensor(**values)
     except ValueError:
         return point
     return with_self_emission_split(point, sensor)

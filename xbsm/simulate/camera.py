@@ -17,7 +17,8 @@ import xarray as xr
 from scipy.ndimage import convolve
 
 from .. import noise as noise_terms
-from .._metadata import named
+from .._metadata import Output
+from ..params import contract
 from ._arrays import align_leading
 
 __all__ = ["add_noise", "digital_filter", "digitize", "seed_entropy"]
@@ -59,6 +60,7 @@ def _gaussian_sigma(sensor, quantization):
     return np.sqrt(s["read_noise"] ** 2 + s["other_noise"] ** 2)
 
 
+@contract(Output("noisy", "count", "photoelectrons with noise"))
 def add_noise(photoelectrons: xr.DataArray, sensor: xr.Dataset, *, seed=None,
               quantization="round", dims=("y", "x")) -> xr.DataArray:
     """Photoelectron images with shot, dark-current, read and other noise.
@@ -94,7 +96,7 @@ def add_noise(photoelectrons: xr.DataArray, sensor: xr.Dataset, *, seed=None,
         _noise_kernel, photoelectrons, sigma, ids, kwargs={"entropy": entropy},
         input_core_dims=[list(dims), [], []], output_core_dims=[list(dims)],
         dask="parallelized", output_dtypes=[float])
-    return named(out, "count", "photoelectrons with noise")
+    return out
 
 
 def _filter_kernel(img, size_y, size_x, kernel):
@@ -148,6 +150,7 @@ def _adc_kernel(pe, well, levels, mode):
         return np.clip(np.round(pe / well * levels), 0.0, np.floor(levels))
 
 
+@contract(Output("counts", "1", "digital counts"))
 def digitize(photoelectrons: xr.DataArray, sensor: xr.Dataset, quantization="round"):
     """Digital counts of the analog-to-digital converter.
 
@@ -170,4 +173,4 @@ def digitize(photoelectrons: xr.DataArray, sensor: xr.Dataset, quantization="rou
     out = xr.apply_ufunc(_adc_kernel, photoelectrons, sensor["max_well"], levels,
                          kwargs={"mode": quantization}, dask="parallelized",
                          output_dtypes=[float])
-    return named(out, "1", "digital counts")
+    return out

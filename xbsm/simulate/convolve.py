@@ -22,8 +22,9 @@ import xarray as xr
 from scipy import fft
 from scipy.ndimage import correlate
 
+from ..params import contract
 from ._arrays import align_leading
-from .options import IMAGE_KNOBS
+from .options import IMAGE_RULES
 
 __all__ = ["blur", "blur_by_otf", "cropped_inverse", "padded_spectrum"]
 
@@ -93,6 +94,7 @@ def _pybsm_kernel(img, psf, routine):
     return _each(_PYBSM[routine], img, psf)
 
 
+@contract(convolution=IMAGE_RULES["convolution"])
 def blur(image: xr.DataArray, psf: xr.DataArray, convolution="fft",
          dims=("y_input", "x_input")) -> xr.DataArray:
     """Images blurred by a kernel sampled at their own sample spacing.
@@ -117,9 +119,6 @@ def blur(image: xr.DataArray, psf: xr.DataArray, convolution="fft",
     xr.DataArray
         The blurred images, on the broadcast dims, in the input's units. [any]
     """
-    if convolution not in IMAGE_KNOBS["convolution"]:
-        raise ValueError(f"convolution must be one of {IMAGE_KNOBS['convolution']}; "
-                         f"got {convolution!r}")
     for dim in ("psf_y", "psf_x"):
         if dim not in psf.dims:
             raise ValueError(f"psf must have dims ('psf_y', 'psf_x'); got {psf.dims}")

@@ -21,7 +21,7 @@ from .. import flags as fl
 from .._metadata import named
 from ..otf.system import COMPONENTS as SYSTEM_COMPONENTS
 from ..otf.system import otf_weights
-from ..params import check_inputs
+from ..params import Selection, check_inputs, contract
 from . import camera
 from .convolve import blur, blur_by_otf
 from .options import COMPONENTS, ImageMethod, image_method
@@ -46,16 +46,6 @@ RESERVED_IMAGE_DIMS = (*INPUT_DIMS, "psf_y", "psf_x", *RESULT_VARIABLES)
 """Names an image's other dims may not take: the result's own dims and variables."""
 IMAGE_OUTPUTS = ("reflectance", "ideal", "blurred", "noisy", "counts", "psf")
 """The image-sized variables ``outputs=`` chooses from (the rest are always kept)."""
-
-
-def _check_outputs(outputs):
-    if outputs is None:
-        return IMAGE_OUTPUTS
-    chosen = (outputs,) if isinstance(outputs, str) else tuple(outputs)
-    if not chosen or any(o not in IMAGE_OUTPUTS for o in chosen):
-        raise ValueError(f"outputs must be a non-empty selection of {IMAGE_OUTPUTS}; "
-                         f"got {outputs!r}")
-    return chosen
 
 
 def _counts_fill(counts_dtype, sensor):
@@ -288,6 +278,7 @@ def _assemble(images: dict, samp, radiometry, psf, flags, im: ImageMethod, attrs
     return _pixel_coords(out.drop_vars([v for v in IMAGE_OUTPUTS if v not in outputs]))
 
 
+@contract(outputs=Selection(IMAGE_OUTPUTS))
 def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None, seed=None,
                    noise=True, method="accurate", components=None, reflectance=None,
                    reflectance_range=(0.05, 0.95), convolution=None, resampling=None,
@@ -360,7 +351,6 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         ``image_nonfinite``, ``image_flat``, ``reference_unresolved``).
     """
     check_inputs(sensor, scenario)
-    outputs = _check_outputs(outputs)
     counts_dtype, fill = _counts_fill(counts_dtype, sensor)
     im = image_method(method, convolution=convolution, resampling=resampling, basis=basis,
                       reflectance=reflectance if isinstance(reflectance, str) else None)

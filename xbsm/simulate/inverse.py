@@ -12,12 +12,14 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._metadata import named
+from .._metadata import Output
+from ..params import Choice, Pair, Spec, Values, contract
 
 __all__ = ["photoelectrons_to_reflectance", "photoelectrons_to_pixels", "wiener_filter",
            "stretch_contrast_8bit"]
 
 
+@contract(Output("reflectance", "1", "scene reflectance"))
 def photoelectrons_to_reflectance(photoelectrons: xr.DataArray, simulation: xr.Dataset, *,
                                   clip=True) -> xr.DataArray:
     """Scene reflectance that gives these photoelectrons in the simulation's radiometry.
@@ -44,7 +46,7 @@ def photoelectrons_to_reflectance(photoelectrons: xr.DataArray, simulation: xr.D
         out = (photoelectrons - simulation["photoelectron_offset"]) / gain.where(gain > 0)
     if clip:
         out = out.clip(0.0, 1.0)
-    return named(out, "1", "scene reflectance")
+    return out
 
 
 def _minmax_kernel(img, low, high):
@@ -61,6 +63,9 @@ def _minmax_kernel(img, low, high):
     return np.where(np.isfinite(img), out, np.nan)
 
 
+@contract(Output("pixels", "1", "display pixel value"),
+          mode=Choice(("radiometric", "minmax")), pixel_range=Pair(Spec("1", "pixel value")),
+          reflectance_range=Pair(Spec("1", "reflectance")))
 def photoelectrons_to_pixels(photoelectrons: xr.DataArray, simulation: xr.Dataset | None = None,
                              *, mode="radiometric", pixel_range=(0.0, 255.0),
                              reflectance_range=(0.05, 0.95), dims=("y", "x")) -> xr.DataArray:
@@ -89,9 +94,7 @@ def photoelectrons_to_pixels(photoelectrons: xr.DataArray, simulation: xr.Datase
     xr.DataArray
         Pixel values clipped to ``pixel_range``; NaN stays NaN. [1]
     """
-    low, high = (float(v) for v in pixel_range)
-    if not low < high:
-        raise ValueError(f"pixel_range must be increasing; got {pixel_range!r}")
+    low, high = pixel_range
     if mode == "minmax":
         out = xr.apply_ufunc(_minmax_kernel, photoelectrons, kwargs={"low": low, "high": high},
                              input_core_dims=[list(dims)], output_core_dims=[list(dims)],
@@ -99,16 +102,14 @@ def photoelectrons_to_pixels(photoelectrons: xr.DataArray, simulation: xr.Datase
     elif mode == "radiometric":
         if simulation is None:
             raise ValueError("mode='radiometric' needs the simulation (its radiometry)")
-        r1, r2 = (float(v) for v in reflectance_range)
-        if not r1 < r2:
-            raise ValueError(f"reflectance_range must be increasing; got {reflectance_range!r}")
+        r1, r2 = reflectance_range
         refl = photoelectrons_to_reflectance(photoelectrons, simulation)
         out = ((refl - r1) / (r2 - r1) * (high - low) + low).clip(low, high)
-    else:
-        raise ValueError(f"mode must be 'radiometric' or 'minmax'; got {mode!r}")
-    return named(out, "1", "display pixel value")
+    return out
 
 
+@contract(Output("wiener_filter", "1", "Wiener restoration filter"),
+          noise_to_signal=Values(Spec("1", "noise-to-signal power ratio", low=0.0)))
 def wiener_filter(otf, noise_to_signal, *, normalize=True):
     r"""Wiener restoration filter of an OTF (Gonzalez and Woods, Digital Image Processing).
 
@@ -131,12 +132,10 @@ def wiener_filter(otf, noise_to_signal, *, normalize=True):
     -----
     .. math:: W = \frac{H^*}{|H|^2 + S_n / S_f}
     """
-    if np.any(np.asarray(noise_to_signal) < 0):
-        raise ValueError(f"noise_to_signal must be >= 0; got {noise_to_signal!r}")
     out = np.conj(otf) / (np.abs(otf) ** 2 + noise_to_signal)
     if normalize:
         out = out * (1.0 + noise_to_signal)
-    return named(out, "1", "Wiener restoration filter")
+    return out
 
 
 def _stretch_kernel(img, low, high):
@@ -151,6 +150,7 @@ def _stretch_kernel(img, low, high):
     return np.round(np.clip(np.nan_to_num(scaled, nan=0.0), 0, 255)).astype(np.uint8)
 
 
+@contract(Output("pixels", "1", "contrast-stretched 8-bit image"))
 def stretch_contrast_8bit(image: xr.DataArray, percentiles=(0.1, 99.9), dims=("y", "x")):
     """Images contrast-stretched between two percentiles to 8-bit (pyBSM's stretch).
 
@@ -176,4 +176,4 @@ def stretch_contrast_8bit(image: xr.DataArray, percentiles=(0.1, 99.9), dims=("y
     out = xr.apply_ufunc(_stretch_kernel, image, kwargs={"low": low, "high": high},
                          input_core_dims=[list(dims)], output_core_dims=[list(dims)],
                          dask="parallelized", output_dtypes=[np.uint8])
-    return named(out, "1", "contrast-stretched 8-bit image")
+    return out

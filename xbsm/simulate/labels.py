@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._metadata import named
+from .._metadata import Output
+from ..params import contract
 
 __all__ = ["transform_points", "transform_boxes"]
 
@@ -41,6 +42,7 @@ def _labelled(values, dims, labels, what):
     return xr.DataArray(array, dims=dims, coords={last: list(labels)})
 
 
+@contract(Output("points", "1", "point in simulated-image pixel coordinates"))
 def transform_points(points, simulation: xr.Dataset) -> xr.DataArray:
     """Reference-image points in the simulated image's pixel coordinates.
 
@@ -64,10 +66,10 @@ def transform_points(points, simulation: xr.Dataset) -> xr.DataArray:
     y = p.sel(coordinate="y", drop=True) * scale_y + offset_y
     out = xr.concat([x, y], dim="coordinate").assign_coords(coordinate=["x", "y"])
     order = [d for d in (*scale_x.dims, *scale_y.dims) if d in out.dims]
-    return named(out.transpose(*dict.fromkeys(order), ..., "coordinate"), "1",
-                 "point in simulated-image pixel coordinates")
+    return out.transpose(*dict.fromkeys(order), ..., "coordinate")
 
 
+@contract(Output("boxes", "1", "box in simulated-image pixel coordinates"))
 def transform_boxes(boxes, simulation: xr.Dataset, *, clip=False) -> xr.DataArray:
     """Reference-image boxes in the simulated image's pixel coordinates.
 
@@ -104,5 +106,4 @@ def transform_boxes(boxes, simulation: xr.Dataset, *, clip=False) -> xr.DataArra
         out = [o.clip(0, size) for o, size in zip(out, sizes, strict=True)]
     result = xr.concat(out, dim="corner").assign_coords(corner=list(labels))
     order = [d for d in moved.dims if d in result.dims]
-    return named(result.transpose(*order, ..., "corner"), "1",
-                 "box in simulated-image pixel coordinates")
+    return result.transpose(*order, ..., "corner")

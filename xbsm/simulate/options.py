@@ -17,7 +17,7 @@ from types import MappingProxyType
 
 from ..methods import Method
 from ..methods import method as model_method
-from ..params import unknown_keyword
+from ..params import Choice, Instance, unknown_keyword
 
 __all__ = ["ImageMethod", "image_method"]
 
@@ -33,6 +33,10 @@ IMAGE_KNOBS = MappingProxyType({
     "integration_time": ("effective", "maximum"),
     "quantization": ("round", "pybsm"),
 })
+
+#: The declared rule of every image knob but ``model`` (params words).
+IMAGE_RULES = MappingProxyType({name: Choice(choices) for name, choices in IMAGE_KNOBS.items()})
+_MODEL = Instance(Method, "a Method (xbsm.method(...))")
 
 #: The OTF components ``components=`` may choose (``"defocus"`` needs ``defocus_radius``).
 COMPONENTS = ("aperture", "turbulence", "detector", "jitter", "drift", "wavefront", "filter",
@@ -107,13 +111,9 @@ class ImageMethod:
     quantization noise is added as Gaussian noise too and counts are floored."""
 
     def __post_init__(self):
-        if not isinstance(self.model, Method):
-            raise ValueError(f"image method knob model must be a Method; got {self.model!r}")
-        for name, choices in IMAGE_KNOBS.items():
-            value = getattr(self, name)
-            if not (isinstance(value, str) and value in choices):
-                allowed = ", ".join(map(repr, choices))
-                raise ValueError(f"{name} must be one of {allowed}; got {value!r}")
+        _MODEL.check("image method knob model", self.model)
+        for name, rule in IMAGE_RULES.items():
+            rule.check(name, getattr(self, name))
 
     def replace(self, **knobs) -> ImageMethod:
         """A copy with some knobs changed (``None`` keeps a knob)."""

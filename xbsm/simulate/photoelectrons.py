@@ -12,11 +12,12 @@ import xarray as xr
 
 from .. import _chain, params
 from ..methods import method as resolve_method
-from ..params import check_inputs
+from ..params import Resolved, check_inputs, contract
 
 __all__ = ["reflectance_to_photoelectrons"]
 
 
+@contract(method=Resolved(resolve_method))
 def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, reflectance=None,
                                   method="accurate", *, temperature=300.0,
                                   integration_time=None) -> xr.Dataset:
@@ -53,7 +54,6 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
     reflectance (Eq. 1 is).
     """
     check_inputs(sensor, scenario)
-    m = resolve_method(method)
     s = sensor
     if reflectance is None:
         reflectance = np.linspace(0.0, 1.0, 100)
@@ -65,5 +65,5 @@ def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, refl
     temperature = params.argument("temperature", temperature)
     integration_time = (s["integration_time"] if integration_time is None
                         else params.argument("integration_time", integration_time))
-    return _chain.reflectance_to_photoelectrons(sensor, scenario, m, reflectance, temperature,
+    return _chain.reflectance_to_photoelectrons(sensor, scenario, method, reflectance, temperature,
                                                 integration_time)

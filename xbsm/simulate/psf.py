@@ -25,10 +25,11 @@ import numpy as np
 import xarray as xr
 from scipy import fft as sp_fft
 
-from .._metadata import named
+from .._metadata import Output
 from ..methods import Method
 from ..otf import defocus, detector, filters, motion, wavefront
 from ..otf.system import spectral_bins, system_components
+from ..params import contract
 
 __all__ = ["Optics", "kernel_from_otf", "kernel_half_width", "nyquist_otf", "otf_on_grid",
            "otf_rfft_grid"]
@@ -261,6 +262,7 @@ def otf_rfft_grid(optics: Optics, angle, size_y: int, size_x: int) -> xr.DataArr
     return otf.broadcast_like(grid).assign_coords(fy=fy, fx=fx)
 
 
+@contract(Output("psf", "1", "blur kernel at the reference image's sampling"))
 def kernel_from_otf(otf: xr.DataArray, size_x: int, half_width: int) -> xr.DataArray:
     """The middle (2 half_width + 1)^2 samples of the blur kernel of an ``otf_rfft_grid``.
 
@@ -290,7 +292,7 @@ def kernel_from_otf(otf: xr.DataArray, size_x: int, half_width: int) -> xr.DataA
                          output_core_dims=[["psf_y", "psf_x"]])
     out = out.assign_coords(psf_y=("psf_y", offsets.astype(float), {"units": "1"}),
                             psf_x=("psf_x", offsets.astype(float), {"units": "1"}))
-    return named(out, "1", "blur kernel at the reference image's sampling")
+    return out
 
 
 def _cutoff(optics: Optics):
@@ -303,6 +305,7 @@ def _cutoff(optics: Optics):
     return optics.sensor["aperture_diameter"] / optics.sensor["wavelength_min"]
 
 
+@contract(Output("nyquist_otf", "1", "largest |OTF| at the reference image's Nyquist frequency"))
 def nyquist_otf(optics: Optics, angle: xr.DataArray) -> xr.DataArray:
     """The chosen components' |OTF| at the reference image's Nyquist frequency.
 
@@ -316,4 +319,4 @@ def nyquist_otf(optics: Optics, angle: xr.DataArray) -> xr.DataArray:
     for name in optics.components:
         if name in _RADIAL:
             otf = otf * np.abs(_along(radial[name], "x").isel(frequency=0, drop=True))
-    return named(otf, "1", "largest |OTF| at the reference image's Nyquist frequency")
+    return otf

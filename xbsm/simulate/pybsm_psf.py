@@ -19,7 +19,8 @@ import xarray as xr
 from scipy import fft
 from scipy.ndimage import zoom
 
-from .._metadata import named
+from .._metadata import Output
+from ..params import contract
 from .psf import Optics, otf_on_grid
 
 __all__ = ["pybsm_psf"]
@@ -80,6 +81,7 @@ def _placed(kernels: list[np.ndarray]) -> np.ndarray:
     return out
 
 
+@contract(Output("psf", "1", "blur kernel at the reference image's sampling (pyBSM 0.16.1)"))
 def pybsm_psf(optics: Optics, angle: xr.DataArray):
     """The blur kernel of pyBSM 0.16.1 for every scenario, placed in one odd-sized array.
 
@@ -124,4 +126,4 @@ def pybsm_psf(optics: Optics, angle: xr.DataArray):
                        coords={"psf_y": ("psf_y", offsets, {"units": "1"}),
                                "psf_x": ("psf_x", offsets, {"units": "1"}),
                                **{d: cells[d] for d in cells.dims if d in cells.coords}})
-    return named(psf, "1", "blur kernel at the reference image's sampling (pyBSM 0.16.1)")
+    return psf

@@ -16,7 +16,8 @@ import xarray as xr
 
 from .. import flags as fl
 from .._metadata import named
-from .options import IMAGE_KNOBS
+from ..params import FRACTION, Either, Pair, Spec, Table, contract
+from .options import IMAGE_RULES
 
 __all__ = ["image_to_reflectance"]
 
@@ -100,53 +101,23 @@ def _flat_kernel(img, *, func, ncore, **kwargs):
     return refl.reshape(shape), bits
 
 
-def _check_table(table):
-    try:
-        pixels, reflectances = (np.asarray(v, dtype=float).ravel() for v in table)
-    except (TypeError, ValueError):
-        raise ValueError("reflectance must be 'percentile', 'minmax', 'identity' or a pair "
-                         "(pixel_values, reflectance_values)") from None
-    if pixels.size < 2 or pixels.size != reflectances.size:
-        raise ValueError("reflectance table needs at least 2 pixel values and as many "
-                         f"reflectances; got {pixels.size} and {reflectances.size}")
-    order = np.argsort(pixels)
-    pixels, reflectances = pixels[order], reflectances[order]
-    if not (np.all(np.isfinite(pixels)) and np.all(np.diff(pixels) > 0)):
-        raise ValueError("reflectance table pixel_values must be finite and distinct")
-    if not np.all((reflectances >= 0) & (reflectances <= 1)):
-        raise ValueError("reflectance table reflectance_values must be in [0, 1]")
-    return pixels, reflectances
-
-
-def _check_range(reflectance_range):
-    message = ("reflectance_range must be a pair (low, high) with 0 <= low < high <= 1; "
-               f"got {reflectance_range!r}")
-    try:
-        low, high = (float(v) for v in reflectance_range)
-    except (TypeError, ValueError):  # None, one value, three, not numbers
-        raise ValueError(message) from None
-    if not (0.0 <= low < high <= 1.0):
-        raise ValueError(message)
-    return low, high
-
-
 def _kernel_for(mapping, reflectance_range):
     """The per-image numpy kernel and its keyword arguments for a mapping choice."""
     if isinstance(mapping, str):
-        if mapping not in IMAGE_KNOBS["reflectance"]:
-            raise ValueError("reflectance must be 'percentile', 'minmax', 'identity' or a pair "
-                             f"(pixel_values, reflectance_values); got {mapping!r}")
         if mapping == "identity":
             return _identity_kernel, {}
-        low, high = _check_range(reflectance_range)
+        low, high = reflectance_range
         return _stretch_kernel, dict(mode=mapping, low=low, high=high)
-    pixels, reflectances = _check_table(mapping)
+    pixels, reflectances = mapping
     if pixels.size == 2:  # pyBSM's two-point form, same arithmetic as the stretches
         return _stretch_kernel, dict(mode="table", low=reflectances[0], high=reflectances[1],
                                      pixel_low=pixels[0], pixel_high=pixels[1])
     return _table_kernel, dict(pixels=pixels, reflectances=reflectances)
 
 
+@contract(reflectance=Either(IMAGE_RULES["reflectance"], Table(
+    "pixel_values", "reflectance_values", Spec("1", "reflectance", **FRACTION))),
+          reflectance_range=Pair(Spec("1", "reflectance", **FRACTION)))
 def image_to_reflectance(image: xr.DataArray, reflectance="percentile",
                          reflectance_range=(0.05, 0.95), *, dims=("y", "x")) -> xr.Dataset:
     """Scene reflectance of each image of a stack, clipped to [0, 1].

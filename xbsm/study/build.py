@@ -27,6 +27,7 @@ from .. import model, params
 from .._version import __version__
 from ..methods import method as make_method
 from . import _cf
+from .attributes import parameter_attributes
 from .spec import SCENARIO_PARAMETERS, SENSOR_PARAMETERS, Study
 
 
@@ -232,4 +233,5 @@ def _provenance(study: Study) -> dict:
                                                    getattr(method, field.name)))
            for field in dataclasses.fields(method) if field.name != "name"},
         "xbsm_study": study.text,
+        **parameter_attributes(study),  # what the figures read (xbsm.study.attributes)
     }
