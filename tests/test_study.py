@@ -265,6 +265,21 @@ def test_chunks_follow_the_study(tiny):
         for c, n in zip(chunks.values(), spec.sizes.values(), strict=True))
 
 
+def test_chunks_cut_first_the_dims_every_output_varies_along():
+    # every output of MILLION varies along ground_range and altitude, the SNR terms not
+    # along drift_rate_x: ground_range (the longest) is cut just enough, 50,000 / (10 x 10
+    # x 2 x 50) = 5 long, and drift_rate_x stays whole, so no chunk repeats the SNR chain
+    spec = study.parse(MILLION.replace("[sweep]", "[run]\nchunk_scenarios = 50000\n[sweep]"))
+    assert study.chunk_sizes(spec) == {"ground_range": 5, "altitude": 10, "focal_length": 10,
+                                       "visibility": 2, "drift_rate_x": 50}
+    # 30 cuts every other dim to 1 (visibility last of them: only gsd, slant range and
+    # elevation do not vary along it), then the drift rate into blocks of equal length:
+    # 50 in 2 blocks of 25, not 30 + 20
+    spec = study.parse(MILLION.replace("[sweep]", "[run]\nchunk_scenarios = 30\n[sweep]"))
+    assert study.chunk_sizes(spec) == {"ground_range": 1, "altitude": 1, "focal_length": 1,
+                                       "visibility": 1, "drift_rate_x": 25}
+
+
 def test_local_cluster_workers_keep_glibc_heap_trimming(monkeypatch):
     # distributed sets MALLOC_TRIM_THRESHOLD_=65536 in its workers, which turns off
     # glibc's adaptive mmap threshold: every large temporary was mmapped and faulted
