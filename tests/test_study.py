@@ -119,10 +119,11 @@ def test_rerun_computes_only_the_missing_chunks(tiny, tmp_path, monkeypatch):
 
 
 def test_an_interrupted_finish_leaves_no_output(tiny, tmp_path, monkeypatch):
-    def interrupted(self, *args, **kwargs):
+    def interrupted(*args, **kwargs):  # once OUT.nc.partial exists
+        assert (tmp_path / "out.nc.partial").exists()
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(xr.Dataset, "to_netcdf", interrupted)
+    monkeypatch.setattr(store, "_write_skeleton", interrupted)
     path = tmp_path / "out.nc"
     with pytest.raises(KeyboardInterrupt):
         study.write(study.run(tiny), path, scheduler="synchronous")
