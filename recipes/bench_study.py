@@ -12,6 +12,13 @@ time to build the lazy result, the wall time to compute and write, scenarios per
 second, peak resident memory and the load; per study, the parallel efficiency
 T1 / (2 T2) of each 2-worker configuration.
 
+Where the time goes: ``compute_s`` is the phase that computes and saves the
+chunks, ``assemble_s`` the one that streams them into the NetCDF file (the rest of
+``write_s`` is the fingerprint, the lock and a LocalCluster's start and stop);
+with threads ``model_s`` is the time spent in the chunks' model calls, summed
+over threads, so with 1 thread ``write_s - model_s`` is the study machinery's
+own time (graph, chunk files, assembly, progress).
+
 Peak memory is given two ways: ``getrusage`` in the child (its own peak, and the
 largest of the processes it reaped, e.g. one cluster worker), and the peak of the
 whole process tree's summed RSS (the child, the LocalCluster's nanny and worker
@@ -60,21 +67,39 @@ SCALED_AXIS = {"million.toml": "drift_rate_x", "optics_million.toml": "focal_len
 CONFIGURATIONS = (("threads", 1), ("threads", 2), ("local-cluster", 2))
 
 CHILD = r"""
-import json, resource, sys, time
+import functools, json, resource, sys, threading, time
 t0 = time.perf_counter()
 import xbsm.study as st
+import xbsm.study.build as build
+import xbsm.study.store as store
 spec = st.parse(sys.argv[1], "bench")
 t1 = time.perf_counter()
 result = st.run(spec)
 t2 = time.perf_counter()
+phases, lock = {"model_s": 0.0, "compute_s": 0.0, "assemble_s": 0.0}, threading.Lock()
+def timed(key, function):  # time spent in a function, summed over threads
+    @functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        start = time.perf_counter()
+        try:
+            return function(*args, **kwargs)
+        finally:
+            with lock:
+                phases[key] += time.perf_counter() - start
+    return wrapper
+build._outputs = timed("model_s", build._outputs)  # the model calls (threads only)
+store._compute_missing = timed("compute_s", store._compute_missing)
+store._assemble = timed("assemble_s", store._assemble)
 st.write(result, sys.argv[2], overwrite=True, scheduler=sys.argv[3], workers=int(sys.argv[4]))
 t3 = time.perf_counter()
+if sys.argv[3] != "threads":
+    phases["model_s"] = None  # computed in the workers' processes
 self_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3
 child_rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1e3
 print(json.dumps({"xbsm_file": st.__file__, "scenarios": spec.scenarios,
                   "chunks": int(result.niirs.data.npartitions),
                   "import_s": t1 - t0, "build_s": t2 - t1, "write_s": t3 - t2,
-                  "peak_rss_mb": self_rss, "peak_worker_rss_mb": child_rss}))
+                  "peak_rss_mb": self_rss, "peak_worker_rss_mb": child_rss, **phases}))
 """
 
 
@@ -168,10 +193,14 @@ def chunk_overhead(text: str, repeats: int) -> dict:
 
 
 def print_row(name, label, scheduler, workers, row):
+    model = (f" of which the model {row['model_s']:.1f} s summed over threads"
+             if "model_s" in row else "")
     print(f"{name} [{label}] {scheduler:13s} {workers} worker(s): {row['scenarios']:.0f} "
           f"scenarios in {row['chunks']:.0f} chunks; build {row['build_s']:.2f} s; "
           f"compute+write {row['write_s']:.1f} s (min {row['write_s_min']:.1f}, max "
-          f"{row['write_s_max']:.1f}) = {row['us_per_scenario']:.1f} us/scenario, "
+          f"{row['write_s_max']:.1f}) = {row['us_per_scenario']:.1f} us/scenario "
+          f"[computing {row['compute_s']:.1f} s{model}, then assembling {row['assemble_s']:.1f}"
+          f" s], "
           f"{row['scenarios_per_s']:.0f} scenarios/s; peak RSS {row['peak_rss_mb']:.0f} MB"
           f" (+ largest reaped child {row['peak_worker_rss_mb']:.0f} MB; whole tree "
           f"{row['peak_tree_rss_mb_max']:.0f} MB); file {row['file_mb']:.0f} MB; load "

@@ -31,25 +31,43 @@ from .attributes import parameter_attributes
 from .spec import SCENARIO_PARAMETERS, SENSOR_PARAMETERS, Study
 
 
-def chunk_sizes(study: Study) -> dict[str, int]:
+def chunk_sizes(study: Study, layout: dict | None = None) -> dict[str, int]:
     """Chunk length along every study dimension.
 
     ``[run] chunks`` first; ``band`` one at a time (each band has its own
-    spectral grid); then the longest remaining chunk is halved until a chunk
-    holds at most ``chunk_scenarios`` scenarios.
+    spectral grid); then, until a chunk holds at most ``chunk_scenarios``
+    scenarios, the other dimensions are cut one after the other, each only as
+    much as needed and into blocks of (nearly) equal length: first those that
+    every output varies along, longest first, and last those that fewest
+    outputs vary along. A chunk computes the outputs that do not vary along a
+    cut dimension again for each of its blocks: cutting ``drift_rate_x`` before
+    ``ground_range`` in ``recipes/studies/million.toml`` computed SNR, the
+    atmosphere and turbulence four times (11.0 instead of 8.6 CPU us per
+    scenario).
+
+    ``layout`` (each output variable's dims) comes from one model call on the
+    first scenario when not given.
     """
     sizes = study.sizes
     chunks = {dim: min(size, study.chunks.get(dim, size)) for dim, size in sizes.items()}
     if "band" in chunks:
         chunks["band"] = 1
-    free = [dim for dim in sizes if dim not in study.chunks and dim != "band"]
-    while math.prod(chunks.values()) > study.chunk_scenarios:
-        splittable = [dim for dim in free if chunks[dim] > 1]
-        if not splittable:
+    if layout is None:
+        layout = _template(study, _coords(study))[1]
+    for dim in sorted((dim for dim in sizes if dim not in study.chunks and dim != "band"),
+                      key=lambda dim: (_repeated_volume(layout, sizes, dim), -sizes[dim])):
+        if math.prod(chunks.values()) <= study.chunk_scenarios:
             break
-        dim = max(splittable, key=lambda d: chunks[d])
-        chunks[dim] = math.ceil(chunks[dim] / 2)
+        others = math.prod(chunks.values()) // chunks[dim]
+        length = max(1, study.chunk_scenarios // others)
+        chunks[dim] = math.ceil(sizes[dim] / math.ceil(sizes[dim] / length))
     return chunks
+
+
+def _repeated_volume(layout: dict, sizes: dict, dim: str) -> int:
+    """How many output values do not vary along ``dim`` (computed again per block)."""
+    return sum(math.prod(sizes[d] for d in dims if d in sizes)
+               for dims in layout.values() if dim not in dims)
 
 
 def _coords(study: Study) -> dict:
@@ -199,9 +217,9 @@ def run(study: Study) -> xr.Dataset:
     Each chunk is one eager model call; a variable that does not depend on a
     study dimension takes its blocks from the chunks at index 0 along it.
     """
-    chunks = chunk_sizes(study)
     coords = _coords(study)
     sample, layout = _template(study, coords)
+    chunks = chunk_sizes(study, layout)
     if study.variables:  # [outputs] variables: only these are kept, computed chunk by chunk
         layout = {name: dims for name, dims in layout.items() if name in study.variables}
     positions = [dsa.arange(size, chunks=chunks[dim]) for dim, size in study.sizes.items()]
