@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -66,3 +68,25 @@ def test_decode_of_every_flag_variable_of_a_niirs_result():
     for name in [v for v in n.data_vars if v == "flags" or v.endswith("_flags")]:
         bits = flags.decode(n[name])
         assert set(bits.data_vars) >= set(n[name].attrs["flag_meanings"].split())
+
+
+def test_a_one_axis_drift_with_a_negative_slice_is_nan_flagged_and_silent():
+    # issue 23: the `fast` rule on a one-axis drift of 170-180 pixels (Olson NIR, IFOV
+    # 2 urad, 30 ms) gives rer_x slightly below zero. Every GIQE is undefined there:
+    # NaN with rer_nonpositive ("either slice", docs/flags.md), both appliers, and no
+    # numpy RuntimeWarning reaching the user.
+    from xbsm.examples import olson_scenario, olson_sensor
+    pixels = xr.DataArray(np.arange(170.0, 180.0), dims="drift_pixels")
+    sensor = olson_sensor("nir", drift_rate_x=pixels * 2e-6 / 0.03)
+    scenario = olson_scenario(ground_range=0.0).isel(visibility=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        swept = xbsm.niirs(sensor, scenario, method="fast")
+        negative = swept.rer_x < 0
+        assert negative.any()  # the case the test is about
+        single = xbsm.niirs(sensor.isel(drift_pixels=int(np.argmax(negative.values))), scenario,
+                            method="fast")
+    for out in (swept.where(negative, drop=True), single):
+        assert np.isnan(out.niirs).all()
+        assert np.isnan(out.rer).all()
+        assert (out.flags.astype(np.int64) & flags.flag("rer_nonpositive")).all()

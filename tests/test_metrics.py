@@ -805,3 +805,18 @@ def test_edge_terms_kernel_gaussian_closed_form():
     np.testing.assert_allclose(rer, erf(1 / (2 * np.sqrt(2) * sigma)), atol=1e-6)
     # no overshoot: the response rises monotonically, so EHO is ER(1.25 px) (IBSM Eq. 3-60)
     np.testing.assert_allclose(eho, ndtr(1.25 / sigma), atol=1e-6)
+
+
+@pytest.mark.parametrize("rer_x", [-0.01, 0.0, np.nan])
+def test_giqe5_with_a_nonpositive_slice_is_nan_and_flagged(rer_x):
+    # GIQE 5's RER is (max * min^2)^(1/3): squaring the poorer slice would turn the
+    # sign of a slice at -0.01 into a finite -4.87 NIIRS (issue 23). The equation is
+    # undefined there, as GIQE 3/4's geometric mean is; docs/flags.md says
+    # rer_nonpositive is set where either slice is not positive.
+    out = metrics.giqe5(rer_x=rer_x, rer_y=0.3, gsd=0.3, snr=20, elevation=np.pi / 2)
+    assert np.isnan(float(out.niirs)) and np.isnan(float(out.rer))
+    assert int(out.flags) & flags.flag("rer_nonpositive")
+    assert bool(flags.is_invalid(out.flags))
+    # the order of the slices does not matter
+    swapped = metrics.giqe5(rer_x=0.3, rer_y=rer_x, gsd=0.3, snr=20, elevation=np.pi / 2)
+    assert np.isnan(float(swapped.niirs))

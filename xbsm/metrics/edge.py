@@ -272,6 +272,19 @@ SLICE_OUTPUTS = outputs(
 unfiltered system along x and y, ``rer_unfiltered_x`` and ``rer_unfiltered_y``)."""
 
 
+def _rer_mean_kernel(rer_x, rer_y):
+    """Geometric mean of the two slices' RER; NaN unless both are positive (the product of
+    two negative slices would otherwise pass for a resolved edge)."""
+    with np.errstate(invalid="ignore"):
+        return np.where((rer_x > 0) & (rer_y > 0), np.sqrt(rer_x * rer_y), np.nan)
+
+
+def _eho_mean_kernel(eho_x, eho_y):
+    """Geometric mean of the two slices' EHO (NaN, without a warning, where it has none)."""
+    with np.errstate(invalid="ignore"):
+        return np.sqrt(eho_x * eho_y)
+
+
 def slice_terms(filtered, unfiltered, ifov, weights, edge_otf: str) -> xr.Dataset:
     """RER and EHO of the x and y slices of a system OTF, and their geometric means.
 
@@ -300,8 +313,8 @@ def slice_terms(filtered, unfiltered, ifov, weights, edge_otf: str) -> xr.Datase
     rer_unfiltered = sliced["rer"] if unfiltered is None else edge(unfiltered)["rer"]
     by_orientation = {o: sliced.sel(orientation=o, drop=True) for o in ("x", "y")}
     out = {f"{name}_{o}": by_orientation[o][name] for name in ("rer", "eho") for o in ("x", "y")}
-    out["rer"] = np.sqrt(out["rer_x"] * out["rer_y"])
-    out["eho"] = np.sqrt(out["eho_x"] * out["eho_y"])
+    out["rer"] = xr.apply_ufunc(_rer_mean_kernel, out["rer_x"], out["rer_y"], dask="allowed")
+    out["eho"] = xr.apply_ufunc(_eho_mean_kernel, out["eho_x"], out["eho_y"], dask="allowed")
     out = {name: declared(out[name], o) for name, o in SLICE_OUTPUTS.items()}
     return dataset({**out, **{f"rer_unfiltered_{o}": rer_unfiltered.sel(orientation=o, drop=True)
                               for o in ("x", "y")}})
@@ -316,5 +329,5 @@ def slice_terms_arrays(filtered, unfiltered, ifov, weights, abscissa, edge_otf: 
     (rer_x, rer_y), (eho_x, eho_y) = edge(filtered)
     unfiltered_x, unfiltered_y = (rer_x, rer_y) if unfiltered is None else edge(unfiltered)[0]
     return {"rer_x": rer_x, "rer_y": rer_y, "eho_x": eho_x, "eho_y": eho_y,
-            "rer": np.sqrt(rer_x * rer_y), "eho": np.sqrt(eho_x * eho_y),
+            "rer": _rer_mean_kernel(rer_x, rer_y), "eho": _eho_mean_kernel(eho_x, eho_y),
             "rer_unfiltered_x": unfiltered_x, "rer_unfiltered_y": unfiltered_y}

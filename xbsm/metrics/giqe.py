@@ -301,7 +301,10 @@ def _giqe4_kernel(rer, gsd, elevation, eho, noise_gain, snr, noise_coefficient):
 def _giqe5_rer_kernel(rer_x, rer_y):
     hi, lo = np.maximum(rer_x, rer_y), np.minimum(rer_x, rer_y)
     with np.errstate(all="ignore"):
-        return (hi * lo**2.0) ** (1.0 / 3.0)
+        rer = (hi * lo**2.0) ** (1.0 / 3.0)
+    # squaring the poorer slice would hide its sign: a slice at or below zero (or NaN)
+    # leaves GIQE 5 undefined, as it does GIQE 3 and 4's geometric mean
+    return np.where(lo > 0, rer, np.nan)
 
 
 def _giqe5_kernel(gsd, elevation, snr, rer_x, rer_y):
@@ -612,7 +615,8 @@ def giqe5_rer(rer_x, rer_y):
     Returns
     -------
     xr.DataArray
-        Combined RER. [1]
+        Combined RER; NaN where either slice is not positive (squaring the poorer
+        slice would otherwise hide its sign). [1]
 
     Notes
     -----
@@ -650,7 +654,8 @@ def giqe5(*, rer_x, rer_y, gsd, snr, elevation, calibration=GIQE5_CALIBRATION, q
     -------
     xr.Dataset
         ``niirs`` [1], ``gsd_w`` [m], ``rer`` [1] and ``flags``. NIIRS is NaN
-        where SNR, RER, GSD or sin(elevation) is not positive.
+        (and ``rer_nonpositive`` set) where either RER slice is not positive, and NaN
+        where SNR, GSD or sin(elevation) is not positive.
 
     Notes
     -----
