@@ -7,6 +7,8 @@ public boundary; the CF attributes of a result come from
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import xarray as xr
 
@@ -64,7 +66,54 @@ def _spectral(func, *args, spectral: int = 2, dtype=float, **knobs):
     the kernel reduces; ``wavelength`` is one dask chunk inside the kernel.
     """
     core = [[]] * (len(args) - spectral) + [["wavelength"]] * spectral
-    return apply_kernel(func, *args, core=core, dtype=dtype, **knobs)
+    return apply_kernel(in_blocks, *args, core=core, dtype=dtype, kernel=func,
+                        spectral=spectral, **knobs)
+
+
+BLOCK_VALUES = 2**15
+"""Monochromatic values a polychromatic kernel holds at once in :func:`in_blocks` (256 KiB
+of float64 per temporary: a sweep of 10^4 optical states x 80 nodes x 31 wavelengths is
+25 million values, and a kernel's dozen temporaries of that size run at the speed of
+memory, not of the arithmetic)."""
+
+
+def in_blocks(*args, kernel, spectral: int, **knobs):
+    """``kernel(*args, **knobs)`` over slices of the broadcast shape, in cache-sized blocks.
+
+    The last ``spectral`` arguments carry ``wavelength`` on their last axis, which the
+    kernel reduces; the others are broadcast arguments (numpy's rules: missing leading
+    axes). The slices run along the longest broadcast axis, each holding about
+    :data:`BLOCK_VALUES` monochromatic values; every output value is the kernel's
+    value on its own inputs (the kernels are elementwise outside the spectral sum).
+    """
+    arrays = [np.asarray(a) for a in args]
+    plain, spec = arrays[:len(arrays) - spectral], arrays[len(arrays) - spectral:]
+    shape = np.broadcast_shapes(*(a.shape for a in plain), *(a.shape[:-1] for a in spec))
+    per_value = max(a.shape[-1] for a in spec)
+    if not shape or math.prod(shape) * per_value <= 2 * BLOCK_VALUES:
+        return kernel(*args, **knobs)
+    axis = int(np.argmax(shape))
+    rest = math.prod(shape) // shape[axis]
+    step = max(1, BLOCK_VALUES // (rest * per_value))
+    out = None
+    for lo in range(0, shape[axis], step):
+        hi = min(lo + step, shape[axis])
+        part = kernel(*(_slab(a, len(shape), axis, lo, hi, 0) for a in plain),
+                      *(_slab(a, len(shape), axis, lo, hi, 1) for a in spec), **knobs)
+        if out is None:
+            out = np.empty(shape, dtype=np.result_type(part))
+        out[(slice(None),) * axis + (slice(lo, hi),)] = part
+    return out
+
+
+def _slab(a, ndim, axis, lo, hi, core):
+    """Entries ``lo:hi`` of broadcast axis ``axis`` of ``a`` (``core`` trailing axes)."""
+    own = axis - (ndim - (a.ndim - core))  # numpy broadcasting aligns the axes on the right
+    if own < 0 or a.shape[own] == 1:
+        return a
+    index = [slice(None)] * a.ndim
+    index[own] = slice(lo, hi)
+    return a[tuple(index)]
 
 
 def weighted_sum_kernel(otf, weights):

@@ -195,7 +195,17 @@ def _aperture_band_kernel(radial, aperture_diameter, obscuration_ratio, wl, w):
 
 
 def _wavefront_band_kernel(variance, variance_wavelength, fx, length_x, fy, length_y, wl, w):
-    """Random-phase wavefront OTF weighted over the last (wavelength) axis (numpy)."""
+    """Random-phase wavefront OTF weighted over the last (wavelength) axis (numpy).
+
+    Without wavefront error (every variance 0, as in most sensors) each monochromatic
+    OTF is exp(-0) = 1 exactly, and the weighted sum is the sum of the weights.
+    """
+    if not np.any(variance):
+        shape = np.broadcast_shapes(*(np.shape(a) for a in (
+            variance, variance_wavelength, fx, length_x, fy, length_y)), np.shape(w)[:-1])
+        # the sum as the product with ones sums it, so that the result is the same to the bit
+        total = np.einsum("...k,...k->...", np.ones(np.shape(w)[-1]), w)
+        return np.array(np.broadcast_to(total, shape))
     mono = wavefront.random_phase_kernel(_last(variance), _last(variance_wavelength), wl,
                                           _last(fx), _last(length_x), _last(fy), _last(length_y))
     return np.einsum("...k,...k->...", mono, w)
