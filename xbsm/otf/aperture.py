@@ -95,9 +95,10 @@ def circular_aperture_kernel(radial, aperture_diameter, wavelength, obscuration_
     inside = ~(nu >= 1.0)  # NaN stays inside, and stays NaN
     nu, eta = nu[inside], eta[inside]
     obscured = eta > 0
-    eta_safe = np.where(obscured, eta, 1.0)
     eta2 = eta**2
-    inner = np.where(obscured, eta2 * _diffraction_term(nu / eta_safe), 0.0)
+    inner = np.zeros(nu.shape)
+    central = obscured & ~(nu >= eta)  # elsewhere nu / eta >= 1: the term is exactly 0
+    inner[central] = eta2[central] * _diffraction_term(nu[central] / eta[central])
     below = nu < (1.0 - eta) / 2.0
     overlap = np.where(obscured & below, -2.0 * eta2, 0.0)
     band = obscured & ~below & (nu <= (1.0 + eta) / 2.0)
