@@ -132,7 +132,7 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
     parts = {
         # sensor quantities, weighted per scenario where they depend on wavelength
         "aperture": _spectral(_aperture_band_kernel, radial, s["aperture_diameter"],
-                              s["obscuration_ratio"], wl, w),
+                              s["obscuration_ratio"], wl, w, blocked=True),
         "turbulence": None,
         "detector": apply_kernel(detector_kernel, s["detector_width_x"], s["focal_length"], fx,
                               s["detector_width_y"], fy_),
@@ -141,7 +141,7 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
                            s["tdi_stages"], fx, s["drift_rate_y"], fy_),
         "wavefront": _spectral(_wavefront_band_kernel, s["wavefront_variance"],
                                s["wavefront_wavelength"], fx, s["wavefront_correlation_length_x"],
-                               fy_, s["wavefront_correlation_length_y"], wl, w),
+                               fy_, s["wavefront_correlation_length_y"], wl, w, blocked=True),
     }
     parts["turbulence"], r0_band = _turbulence(s, sc, radial, wl, w, integration_time,
                                                slant_range, method)
