@@ -81,30 +81,43 @@ def circular_aperture_kernel(radial, aperture_diameter, wavelength, obscuration_
     """IBSM Eq. 3-20 on plain arrays: radial frequency [cycles/rad], D [m], lambda [m], eta [1].
 
     Entries with eta = 0 reduce to the unobscured term exactly (the obscured terms
-    are set to 0 there and the divisions guarded).
+    are set to 0 there and the divisions guarded). Each piece is evaluated only where
+    it is needed: nothing at or beyond the cutoff (nu >= 1, where every term is exactly
+    0), the annulus overlap's transcendentals only on (1 - eta)/2 <= nu <= (1 + eta)/2;
+    every value is the one the formula gives on the whole array.
     """
     nu = radial / (aperture_diameter / wavelength)
-    unobscured = _diffraction_term(nu)
     eta = np.asarray(obscuration_ratio, dtype=float)
     if not np.any(eta > 0):
-        return unobscured + np.zeros_like(eta)  # exact: adds 0 and eta's axes
+        return _diffraction_term(nu) + np.zeros_like(eta)  # exact: adds 0 and eta's axes
+    nu, eta = np.broadcast_arrays(nu, eta)
+    out = np.zeros(nu.shape)
+    inside = ~(nu >= 1.0)  # NaN stays inside, and stays NaN
+    nu, eta = nu[inside], eta[inside]
     obscured = eta > 0
-    eta_safe = np.where(obscured, eta, 1.0)
     eta2 = eta**2
-    inner = eta2 * _diffraction_term(nu / eta_safe)
-    cos_phi = (1.0 + eta2 - 4.0 * nu**2) / (2.0 * eta_safe)
+    inner = np.zeros(nu.shape)
+    central = obscured & ~(nu >= eta)  # elsewhere nu / eta >= 1: the term is exactly 0
+    inner[central] = eta2[central] * _diffraction_term(nu[central] / eta[central])
+    below = nu < (1.0 - eta) / 2.0
+    overlap = np.where(obscured & below, -2.0 * eta2, 0.0)
+    band = obscured & ~below & (nu <= (1.0 + eta) / 2.0)
+    overlap[band] = _annulus_transition(nu[band], eta[band])
+    out[inside] = (_diffraction_term(nu) + inner + overlap) / (1.0 - eta2)
+    return out
+
+
+def _annulus_transition(nu, eta):
+    """The overlap term C of IBSM Eq. 3-20 for (1 - eta)/2 <= nu <= (1 + eta)/2, eta > 0."""
+    eta2 = eta**2
+    cos_phi = (1.0 + eta2 - 4.0 * nu**2) / (2.0 * eta)
     phi = np.arccos(np.minimum(np.maximum(cos_phi, -1.0), 1.0))
-    transition = (
+    return (
         2.0 * eta * np.sin(phi) / np.pi
         + (1.0 + eta2) * phi / np.pi
         - 2.0 * eta2
         - (2.0 * (1.0 - eta2) / np.pi) * np.arctan((1.0 + eta) / (1.0 - eta) * np.tan(phi / 2.0))
     )
-    lower, upper = (1.0 - eta) / 2.0, (1.0 + eta) / 2.0
-    overlap = np.where(nu < lower, -2.0 * eta2, np.where(nu <= upper, transition, 0.0))
-    overlap = np.where(obscured, overlap, 0.0)
-    inner = np.where(obscured, inner, 0.0)
-    return (unobscured + inner + overlap) / (1.0 - eta2)
 
 
 def defocus_wavefront_coefficient(focus_shift, aperture_diameter, focal_length):

@@ -132,7 +132,7 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
     parts = {
         # sensor quantities, weighted per scenario where they depend on wavelength
         "aperture": _spectral(_aperture_band_kernel, radial, s["aperture_diameter"],
-                              s["obscuration_ratio"], wl, w),
+                              s["obscuration_ratio"], wl, w, blocked=True),
         "turbulence": None,
         "detector": apply_kernel(detector_kernel, s["detector_width_x"], s["focal_length"], fx,
                               s["detector_width_y"], fy_),
@@ -141,7 +141,7 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
                            s["tdi_stages"], fx, s["drift_rate_y"], fy_),
         "wavefront": _spectral(_wavefront_band_kernel, s["wavefront_variance"],
                                s["wavefront_wavelength"], fx, s["wavefront_correlation_length_x"],
-                               fy_, s["wavefront_correlation_length_y"], wl, w),
+                               fy_, s["wavefront_correlation_length_y"], wl, w, blocked=True),
     }
     parts["turbulence"], r0_band = _turbulence(s, sc, radial, wl, w, integration_time,
                                                slant_range, method)
@@ -195,7 +195,17 @@ def _aperture_band_kernel(radial, aperture_diameter, obscuration_ratio, wl, w):
 
 
 def _wavefront_band_kernel(variance, variance_wavelength, fx, length_x, fy, length_y, wl, w):
-    """Random-phase wavefront OTF weighted over the last (wavelength) axis (numpy)."""
+    """Random-phase wavefront OTF weighted over the last (wavelength) axis (numpy).
+
+    Without wavefront error (every variance 0, as in most sensors) each monochromatic
+    OTF is exp(-0) = 1 exactly, and the weighted sum is the sum of the weights.
+    """
+    if not np.any(variance):
+        shape = np.broadcast_shapes(*(np.shape(a) for a in (
+            variance, variance_wavelength, fx, length_x, fy, length_y)), np.shape(w)[:-1])
+        # the sum as the product with ones sums it, so that the result is the same to the bit
+        total = np.einsum("...k,...k->...", np.ones(np.shape(w)[-1]), w)
+        return np.array(np.broadcast_to(total, shape))
     mono = wavefront.random_phase_kernel(_last(variance), _last(variance_wavelength), wl,
                                           _last(fx), _last(length_x), _last(fy), _last(length_y))
     return np.einsum("...k,...k->...", mono, w)
