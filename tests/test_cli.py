@@ -213,3 +213,23 @@ def test_a_write_that_fails_is_one_line_naming_the_file_and_keeps_the_chunks(tmp
     assert last.startswith(f"xbsm run: cannot write {out}.partial: ") and "MB free" in last
     assert not out.exists() and not (tmp_path / "out.nc.partial").exists()
     assert len(list((tmp_path / "out.nc.parts").glob("block-*.npz"))) == 48
+
+
+def test_a_failed_write_called_from_python_returns_2_without_ending_the_caller(
+        tmp_path, capsys, monkeypatch):
+    # `xbsm run` ends its own process at once after a refused write (an old HDF5 crashes at
+    # interpreter exit, see xbsm.study.store.WriteFailed), but cli.main([...]) called from
+    # Python returns 2 with the same one line and leaves the caller running
+    from xbsm.study import store
+
+    def refused(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(store, "_stream", refused)
+    out = tmp_path / "out.nc"
+    code = cli.main(["run", str(_study(tmp_path, FORTY_EIGHT_CHUNKS)), "-o", str(out),
+                     "--no-figures"])
+    assert code == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1].startswith(
+        f"xbsm run: cannot write {out}.partial: No space left on device")
+    assert not out.exists()

@@ -16,6 +16,7 @@ a Ctrl-C while Python imports numpy is one line.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -190,6 +191,15 @@ def _command(parser, args) -> None:
         info()
 
 
+def _exit_past_hdf5(code: int) -> None:
+    """End the process without the interpreter's shutdown, where a HDF5 library that has
+    refused a write may crash (see :class:`xbsm.study.store.WriteFailed`); every file of
+    ours is already closed, removed or kept as intended, and the output lock released."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+
+
 def main(argv=None) -> int:
     """Entry point of the ``xbsm`` command."""
     parser = _parser()
@@ -198,8 +208,15 @@ def main(argv=None) -> int:
         try:
             from .study import StudyError  # the heavy imports, under the handlers
 
+            from .study.store import WriteFailed
+
             try:
                 _command(parser, args)
+            except WriteFailed as err:
+                print(f"xbsm {args.command}: {err}", file=sys.stderr)
+                if argv is None:  # the command itself, not a caller's main([...])
+                    _exit_past_hdf5(2)
+                return 2
             except StudyError as err:
                 parser.exit(2, f"xbsm {args.command}: {err}\n")
             except OSError as err:

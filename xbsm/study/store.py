@@ -323,10 +323,20 @@ def _assemble(result, grid, parts, print_, path: Path, progress: bool) -> None:
         os.replace(partial, path)
     except (OSError, RuntimeError) as err:
         partial.unlink(missing_ok=True)
-        raise StudyError(_write_error(partial, err)) from None
+        raise WriteFailed(_write_error(partial, err)) from None
     except BaseException:
         partial.unlink(missing_ok=True)
         raise
+
+
+class WriteFailed(StudyError):
+    """The result file could not be written (a full disk, a file-size limit, an I/O error).
+
+    After the HDF5 library has refused a write it may be unable to shut down: HDF5 1.12
+    and 1.14.2 (in netCDF4's wheels up to 1.7.1) crash the interpreter at exit (SIGSEGV)
+    while cleaning up the file they could not close. ``xbsm run`` therefore ends the
+    process at once after saying so; a Python caller gets this exception.
+    """
 
 
 def _write_error(file: Path, err: Exception) -> str:
