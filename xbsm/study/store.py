@@ -332,8 +332,8 @@ def _assemble(result, grid, parts, print_, path: Path, progress: bool) -> None:
 class WriteFailed(StudyError):
     """The result file could not be written (a full disk, a file-size limit, an I/O error).
 
-    After the HDF5 library has refused a write it may be unable to shut down: HDF5 1.12
-    and 1.14.2 (in netCDF4's wheels up to 1.7.1) crash the interpreter at exit (SIGSEGV)
+    After the HDF5 library has refused a write it may be unable to shut down: HDF5 1.10.5,
+    1.12.2 and 1.14.2 (in netCDF4's wheels 1.6.1 to 1.7.1) crash the interpreter at exit (SIGSEGV)
     while cleaning up the file they could not close. ``xbsm run`` therefore ends the
     process at once after saying so; a Python caller gets this exception.
     """
