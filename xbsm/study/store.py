@@ -50,7 +50,16 @@ _WORKER_START_SECONDS = 120
 #: chunk of recipes/studies/million.toml took 0.64 s instead of 0.36 s with it set
 #: (a peak memory that returns to the OS sooner is not worth it: a chunk's temporaries
 #: are bounded by ``chunk_scenarios``). A value in the user's environment still wins.
-_WORKER_ENVIRON = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+#: The key is left out of the settings rather than set to None: distributed 2023.6 (the
+#: floor) passes None on as the string "None".
+_TRIM_SETTING = "MALLOC_TRIM_THRESHOLD_"
+
+
+def _worker_environ() -> dict:
+    """Distributed's pre-spawn worker environment without its heap-trimming setting."""
+    environ = dask.config.get("distributed.nanny.pre-spawn-environ", default={})
+    return {"distributed.nanny.pre-spawn-environ":
+            {name: value for name, value in environ.items() if name != _TRIM_SETTING}}
 
 
 def netcdf_ready(ds: xr.Dataset) -> xr.Dataset:
@@ -200,8 +209,8 @@ def _distributed_client(scheduler: str, workers: int):
     with contextlib.ExitStack() as stack:
         if scheduler == "local-cluster":
             # dashboard on a free port: a busy 8787 makes distributed retry and leak a socket;
-            # glibc's default heap trimming (see _WORKER_ENVIRON)
-            with dask.config.set(_WORKER_ENVIRON):
+            # glibc's default heap trimming (see _TRIM_SETTING)
+            with dask.config.set(_worker_environ()):
                 cluster = stack.enter_context(LocalCluster(
                     n_workers=workers, threads_per_worker=1, dashboard_address=":0"))
             client = stack.enter_context(Client(cluster))
