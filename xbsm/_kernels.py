@@ -97,6 +97,12 @@ def apply_kernel(kernel, /, *args, core=None, outputs=((),), sizes=None, dtype=f
         dask_gufunc_kwargs={"allow_rechunk": True, "output_sizes": dict(sizes or {})})
 
 
+def _broadcast(array, loop: tuple, cores: int):
+    """``array`` as a view with the ``loop`` shape before its last ``cores`` axes."""
+    shape = np.shape(array)
+    return np.broadcast_to(array, loop + shape[len(shape) - cores:])
+
+
 def _merged_coords(arrays, dropped):
     """Coordinate variables and indexes of ``arrays`` without those on ``dropped`` dims.
 
@@ -117,3 +123,71 @@ def _merged_coords(arrays, dropped):
             if name in own:
                 indexes.setdefault(name, own[name])
     return variables, indexes
+
+
+def apply_orchestrator(orchestrator, declared, /, *args, core=None, dask="parallelized",
+                       **knobs) -> dict:
+    """A stage's array orchestrator run once over ``args``, its outputs labelled as declared.
+
+    The labelled door of a stage: ``orchestrator(*arrays, **knobs)`` (plain arrays in,
+    a dict of named arrays out) through one ``xr.apply_ufunc``, which aligns, broadcasts
+    and carries dask as :func:`apply_kernel` does. Inside, numpy broadcasting computes
+    each output on the axes its operands have; the output is handed to xarray as a
+    broadcast view and then cut back to the dims of the arguments its declaration
+    (:class:`xbsm._metadata.Output`) says it keeps, so a sensor quantity keeps only
+    sensor dims in a sweep and is computed once per sensor.
+
+    Parameters
+    ----------
+    orchestrator : callable
+        The stage's array orchestrator; its leading positional parameters name ``args``.
+    declared : mapping of str to Output
+        Its outputs, in the order it declares them (``dims``: core dims; ``inputs``:
+        the arguments whose dims it keeps).
+    *args : float or xr.DataArray
+        Its array arguments.
+    core : sequence of sequence of str, optional
+        Core dimensions of each argument (default none).
+    dask : {"parallelized", "allowed"}
+        "allowed" when the orchestrator runs on whole dask arrays (it reduces over or
+        reshapes a core dimension that chunks would split).
+    **knobs
+        Plain keyword arguments of ``orchestrator``.
+
+    Returns
+    -------
+    dict of str to xr.DataArray
+        Each output with exactly its declared CF attributes.
+    """
+    names = orchestrator.__code__.co_varnames[:len(args)]
+    core = [list(c) for c in core] if core is not None else [[] for _ in args]
+    cores = [len(c) for c in core]
+    outputs = list(declared.values())
+    args = [a if isinstance(a, xr.DataArray) else xr.DataArray(a) for a in args]
+
+    def run(*arrays):
+        with np.errstate(all="ignore"):  # IEEE results, as xarray arithmetic gives them
+            out = orchestrator(*arrays, **knobs)
+        loop = np.broadcast_shapes(*(np.shape(a)[:np.ndim(a) - n]
+                                     for a, n in zip(arrays, cores, strict=True)))
+        return tuple(_broadcast(out[o.name], loop, len(o.dims)) for o in outputs)
+
+    results = xr.apply_ufunc(
+        run, *args, input_core_dims=core, output_core_dims=[list(o.dims) for o in outputs],
+        join=join_for(args), dask=dask, output_dtypes=[float] * len(outputs),
+        keep_attrs="drop", dask_gufunc_kwargs={"allow_rechunk": True})
+    if len(outputs) == 1:
+        results = (results,)
+    labelled = {}
+    for o, out in zip(outputs, results, strict=True):
+        if o.inputs is not None:
+            keep = dict.fromkeys(d for name in o.inputs for d in args[names.index(name)].dims)
+            keep.update(dict.fromkeys(o.dims))
+            dropped = [d for d in out.dims if d not in keep]
+            if dropped:
+                out = out.isel(dict.fromkeys(dropped, 0), drop=True)
+            if out.dims != tuple(d for d in keep if d in out.dims):
+                out = out.transpose(*(d for d in keep if d in out.dims))
+        out.attrs = o.attrs()
+        labelled[o.name] = out
+    return labelled
