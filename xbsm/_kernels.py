@@ -170,7 +170,8 @@ def apply_orchestrator(orchestrator, declared, /, *args, core=None, dask="parall
             out = orchestrator(*arrays, **knobs)
         loop = np.broadcast_shapes(*(np.shape(a)[:np.ndim(a) - n]
                                      for a, n in zip(arrays, cores, strict=True)))
-        return tuple(_broadcast(out[o.name], loop, len(o.dims)) for o in outputs)
+        arrays = tuple(_broadcast(out[o.name], loop, len(o.dims)) for o in outputs)
+        return arrays if len(arrays) > 1 else arrays[0]
 
     results = xr.apply_ufunc(
         run, *args, input_core_dims=core, output_core_dims=[list(o.dims) for o in outputs],
