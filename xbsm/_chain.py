@@ -382,7 +382,7 @@ class Direct:
 
     @staticmethod
     def slice_terms(filtered, unfiltered, ifov, weights, edge_otf):
-        return edge_.slice_terms_arrays(filtered, unfiltered, ifov, *weights, edge_otf)
+        return edge_.slice_terms_arrays(filtered, unfiltered, *weights, ifov, edge_otf)
 
     @staticmethod
     def undersampled(nodes, cutoff, ifov_x, ifov_y, threshold):

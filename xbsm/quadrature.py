@@ -642,9 +642,10 @@ def band_cutoff(aperture_diameter, wavelength: xr.DataArray, qe, transmission,
     """
     spectral = [a.broadcast_like(wavelength) if isinstance(a, xr.DataArray) else
                 xr.full_like(wavelength, a) for a in (qe, transmission)]
-    return apply_orchestrator(
-        band_cutoff_arrays, CUTOFF_OUTPUTS, aperture_diameter, wavelength, *spectral,
-        wavelength_min, core=[[], ["wavelength"], ["wavelength"], ["wavelength"], []])["cutoff_frequency"]
+    band = ["wavelength"]
+    out = apply_orchestrator(band_cutoff_arrays, CUTOFF_OUTPUTS, aperture_diameter, wavelength,
+                             *spectral, wavelength_min, core=[[], band, band, band, []])
+    return out["cutoff_frequency"]
 
 
 CUTOFF_OUTPUTS = outputs(Output("cutoff_frequency", "cycles/rad",
