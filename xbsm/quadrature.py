@@ -640,8 +640,9 @@ def band_cutoff(aperture_diameter, wavelength: xr.DataArray, qe, transmission,
     xr.DataArray
         [cycles/rad]
     """
-    spectral = [a.broadcast_like(wavelength) if isinstance(a, xr.DataArray) else
-                xr.full_like(wavelength, a) for a in (qe, transmission)]
+    spectral = [(a if "wavelength" in a.dims else a.broadcast_like(wavelength))
+                if isinstance(a, xr.DataArray) else xr.full_like(wavelength, a)
+                for a in (qe, transmission)]
     band = ["wavelength"]
     out = apply_orchestrator(band_cutoff_arrays, CUTOFF_OUTPUTS, aperture_diameter, wavelength,
                              *spectral, wavelength_min, core=[[], band, band, band, []])
