@@ -43,14 +43,13 @@ _ATMOSPHERE_UNITS = (("altitude", "m"), ("ground_range", "m"), ("visibility", "k
 
 OUTPUTS = outputs(
     Output("well_fill", "1", "well fill fraction"),
-    Output("cutoff_frequency", "cycles/rad", "optics cutoff frequency D/lambda_min",
-           carries=("sensor",)),
     Output("coherence_diameter", "m", "band-weighted coherence diameter r0"),
 )
 """The chain's own outputs (the stages declare theirs)."""
 
 _DECLARED = {**radiometry.SIGNAL_OUTPUTS, **noise.OUTPUTS, **geometry.VIEW_OUTPUTS,
-             **edge_.SLICE_OUTPUTS, **giqe_.OUTPUTS, **OUTPUTS}
+             **edge_.SLICE_OUTPUTS, **giqe_.OUTPUTS,
+             **quadrature.CUTOFF_OUTPUTS, **OUTPUTS}
 
 
 # ---- the composition ---------------------------------------------------------------
@@ -345,7 +344,8 @@ class Direct:
         p = self.sensor
         return quadrature.band_cutoff_arrays(p["aperture_diameter"], atm["wavelength"],
                                              band["quantum_efficiency"],
-                                             band["optics_transmission"], p["wavelength_min"])
+                                             band["optics_transmission"],
+                                             p["wavelength_min"])["cutoff_frequency"]
 
     def noise(self, signal):
         return noise.noise_arrays(self.sensor, signal)
@@ -382,7 +382,7 @@ class Direct:
 
     @staticmethod
     def slice_terms(filtered, unfiltered, ifov, weights, edge_otf):
-        return edge_.slice_terms_arrays(filtered, unfiltered, ifov, *weights, edge_otf)
+        return edge_.slice_terms_arrays(filtered, unfiltered, *weights, ifov, edge_otf)
 
     @staticmethod
     def undersampled(nodes, cutoff, ifov_x, ifov_y, threshold):

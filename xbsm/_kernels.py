@@ -97,6 +97,12 @@ def apply_kernel(kernel, /, *args, core=None, outputs=((),), sizes=None, dtype=f
         dask_gufunc_kwargs={"allow_rechunk": True, "output_sizes": dict(sizes or {})})
 
 
+def _broadcast(array, loop: tuple, cores: int):
+    """``array`` as a view with the ``loop`` shape before its last ``cores`` axes."""
+    shape = np.shape(array)
+    return np.broadcast_to(array, loop + shape[len(shape) - cores:])
+
+
 def _merged_coords(arrays, dropped):
     """Coordinate variables and indexes of ``arrays`` without those on ``dropped`` dims.
 
@@ -117,3 +123,103 @@ def _merged_coords(arrays, dropped):
             if name in own:
                 indexes.setdefault(name, own[name])
     return variables, indexes
+
+
+def apply_orchestrator(orchestrator, declared, /, *args, core=None, dask="parallelized",
+                       **knobs) -> dict:
+    """A stage's array orchestrator run once over ``args``, its outputs labelled as declared.
+
+    The labelled door of a stage: ``orchestrator(*arrays, **knobs)`` (plain arrays in,
+    a dict of named arrays out) through one ``xr.apply_ufunc``, which aligns, broadcasts
+    and carries dask as :func:`apply_kernel` does. Inside, numpy broadcasting computes
+    each output on the axes its operands have; the output is handed to xarray as a
+    broadcast view and then cut back to the dims of the arguments its declaration
+    (:class:`xbsm._metadata.Output`) says it keeps, so a sensor quantity keeps only
+    sensor dims in a sweep and is computed once per sensor. When some arguments are dask
+    arrays, the outputs that declare only eager ones are computed eagerly apart (the lazy
+    arguments, on which they do not depend, replaced by NaN).
+
+    Parameters
+    ----------
+    orchestrator : callable
+        The stage's array orchestrator; its leading positional parameters name ``args``.
+    declared : mapping of str to Output
+        Its outputs, in the order it declares them (``dims``: core dims; ``inputs``:
+        the arguments whose dims it keeps).
+    *args : float or xr.DataArray or None
+        Its array arguments (None passes through: an input the stage does without).
+    core : sequence of sequence of str, optional
+        Core dimensions of each argument (default none).
+    dask : {"parallelized", "allowed"}
+        "allowed" when the orchestrator runs on whole dask arrays (it reduces over or
+        reshapes a core dimension that chunks would split).
+    **knobs
+        Plain keyword arguments of ``orchestrator``.
+
+    Returns
+    -------
+    dict of str to xr.DataArray
+        Each output with exactly its declared CF attributes.
+    """
+    names = orchestrator.__code__.co_varnames[:len(args)]
+    args = [a if a is None or isinstance(a, xr.DataArray) else xr.DataArray(a) for a in args]
+    core = [list(c) for c in core] if core is not None else [[] for _ in args]
+    lazy = {name for name, a in zip(names, args, strict=True)
+            if a is not None and a.chunks is not None}
+    groups = [list(declared.values()), []]
+    if lazy:  # outputs of eager arguments only stay eager, as arithmetic would leave them
+        for o in list(groups[0]):
+            if o.inputs is not None and lazy.isdisjoint(o.inputs):
+                groups[0].remove(o)
+                groups[1].append(o)
+    labelled = {}
+    for group, placeholders in zip(groups, (set(), lazy), strict=True):
+        if group:
+            # the group's outputs do not depend on the arguments it leaves out
+            given = [xr.DataArray(np.nan) if name in placeholders else a
+                     for name, a in zip(names, args, strict=True)]
+            results = _apply_outputs(orchestrator, group, given, core, dask, knobs)
+            for o, out in zip(group, results, strict=True):
+                labelled[o.name] = _kept(out, o, args, names)
+    return {name: labelled[name] for name in declared}
+
+
+def _apply_outputs(orchestrator, outputs, args, core, dask, knobs):
+    """The ``outputs`` of ``orchestrator`` over ``args`` (one ``xr.apply_ufunc``), on every dim."""
+    given = [i for i, a in enumerate(args) if a is not None]  # None stays out of dask's way
+    cores, count = [len(core[i]) for i in given], len(args)
+
+    def run(*arrays):
+        every = [None] * count
+        for i, array in zip(given, arrays, strict=True):
+            every[i] = array
+        with np.errstate(all="ignore"):  # IEEE results, as xarray arithmetic gives them
+            out = orchestrator(*every, **knobs)
+        loop = np.broadcast_shapes(*(np.shape(a)[:np.ndim(a) - n]
+                                     for a, n in zip(arrays, cores, strict=True)))
+        arrays = tuple(_broadcast(out[o.name], loop, len(o.dims)) for o in outputs)
+        return arrays if len(arrays) > 1 else arrays[0]
+
+    arrays = [args[i] for i in given]
+    results = xr.apply_ufunc(
+        run, *arrays, input_core_dims=[core[i] for i in given],
+        output_core_dims=[list(o.dims) for o in outputs], join=join_for(arrays), dask=dask,
+        output_dtypes=[float] * len(outputs), keep_attrs="drop",
+        dask_gufunc_kwargs={"allow_rechunk": True})
+    return results if len(outputs) > 1 else (results,)
+
+
+def _kept(out, output, args, names):
+    """``out`` on the dims of the arguments ``output`` declares, with its CF attributes."""
+    if output.inputs is not None:
+        keep = dict.fromkeys(d for name in output.inputs
+                             for d in getattr(args[names.index(name)], "dims", ()))
+        keep.update(dict.fromkeys(output.dims))
+        dropped = [d for d in out.dims if d not in keep]
+        if dropped:
+            out = out.isel(dict.fromkeys(dropped, 0), drop=True)
+        order = tuple(d for d in keep if d in out.dims)
+        if out.dims != order:
+            out = out.transpose(*order)
+    out.attrs = output.attrs()
+    return out

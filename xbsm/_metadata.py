@@ -79,7 +79,9 @@ class Output(NamedTuple):
     ``dims`` are the output's own dims (those of a single eager scenario, e.g.
     ``("wavelength",)``); ``carries`` names the inputs whose sweep dims the output
     keeps (``"sensor"``, ``"scenario"``): an output that carries only the sensor keeps
-    only sensor dims in a sweep.
+    only sensor dims in a sweep. ``inputs`` names the orchestrator's arguments whose
+    dims the output keeps, in the order its dims come (None: all of them); the labelled
+    door (:func:`xbsm._kernels.apply_orchestrator`) labels it so.
     """
 
     name: str
@@ -88,6 +90,7 @@ class Output(NamedTuple):
     dims: tuple = ()
     carries: tuple = ("sensor", "scenario")
     references: str | None = None
+    inputs: tuple | None = None
 
     def attrs(self) -> dict:
         """The CF attributes of the output."""

@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ._kernels import apply_kernel, dataset
-from ._metadata import Output, declared, outputs
+from ._kernels import apply_kernel, apply_orchestrator, dataset
+from ._metadata import Output, outputs
 from .constants import EARTH_RADIUS
 from .params import Choice, contract
 
@@ -449,25 +449,25 @@ def viewing_geometry(ground_range, altitude, pixel_pitch_x, pixel_pitch_y, focal
         ``slant_range`` [m], ``elevation_angle`` [rad], ``ifov_x``, ``ifov_y`` [rad],
         ``gsd_x``, ``gsd_y`` [m].
     """
-    as_da = [x if isinstance(x, xr.DataArray) else xr.DataArray(x)
-             for x in (altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length)]
-    altitude, ground_range, pixel_pitch_x, pixel_pitch_y, focal_length = as_da
-    slant, angle = apply_kernel(slant_and_elevation_kernel, altitude, ground_range,
-                                outputs=((), ()), form=form, elevation=elevation)
-    out = {"slant_range": slant, "elevation_angle": angle}
-    for axis, pitch in (("x", pixel_pitch_x), ("y", pixel_pitch_y)):
-        out[f"ifov_{axis}"] = apply_kernel(_ratio_kernel, pitch, focal_length)
-        out[f"gsd_{axis}"] = apply_kernel(_product_kernel, out[f"ifov_{axis}"], slant)
-    return dataset({name: declared(out[name], o) for name, o in VIEW_OUTPUTS.items()})
+    out = apply_orchestrator(viewing_arrays, VIEW_OUTPUTS, altitude, ground_range,
+                             pixel_pitch_x, pixel_pitch_y, focal_length, elevation=elevation,
+                             form=form)
+    return dataset(out)
 
 
+_SCENE = ("altitude", "ground_range")
 VIEW_OUTPUTS = outputs(
-    Output("slant_range", "m", "slant range", carries=("scenario",)),
-    Output("elevation_angle", "rad", "GIQE elevation angle", carries=("scenario",)),
-    Output("ifov_x", "rad", "instantaneous field of view along x", carries=("sensor",)),
-    Output("gsd_x", "m", "ground sample distance along x"),
-    Output("ifov_y", "rad", "instantaneous field of view along y", carries=("sensor",)),
-    Output("gsd_y", "m", "ground sample distance along y"),
+    Output("slant_range", "m", "slant range", carries=("scenario",), inputs=_SCENE),
+    Output("elevation_angle", "rad", "GIQE elevation angle", carries=("scenario",),
+           inputs=_SCENE),
+    Output("ifov_x", "rad", "instantaneous field of view along x", carries=("sensor",),
+           inputs=("pixel_pitch_x", "focal_length")),
+    Output("gsd_x", "m", "ground sample distance along x",
+           inputs=("pixel_pitch_x", "focal_length", *_SCENE)),
+    Output("ifov_y", "rad", "instantaneous field of view along y", carries=("sensor",),
+           inputs=("pixel_pitch_y", "focal_length")),
+    Output("gsd_y", "m", "ground sample distance along y",
+           inputs=("pixel_pitch_y", "focal_length", *_SCENE)),
 )
 """What :func:`viewing_arrays` and :func:`viewing_geometry` return."""
 

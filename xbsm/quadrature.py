@@ -33,8 +33,8 @@ import math
 import numpy as np
 import xarray as xr
 
-from ._kernels import apply_kernel
-from ._metadata import named
+from ._kernels import apply_kernel, apply_orchestrator
+from ._metadata import Output, named, outputs
 
 __all__ = [
     "EDGE_RULES",
@@ -421,15 +421,8 @@ def edge_nodes(cutoff, ifov_x, ifov_y, **knobs):
         need fewer nodes than the largest are padded with zero weights.
         [cycles/rad]
     """
-    knobs = {k: v for k, v in knobs.items() if k != "name"}
-    rule = knobs.pop("rule")
     (c, ix, iy), dims, coords = _sensor_grid(cutoff, ifov_x, ifov_y)
-    ifov = np.maximum(ix, iy)
-    if rule == "gauss_legendre" and knobs.get("breakpoints") is None:
-        nodes, weights = _gauss_legendre_sensors(c, ifov, **knobs)
-        sine = nodes.copy()
-    else:
-        nodes, weights, sine = _rule_per_sensor(c, ifov, rule, knobs)
+    nodes, weights, sine = edge_rule_arrays(c, ix, iy, **knobs)
     all_dims = ("frequency",) + tuple(dims)
     attrs = {"units": "cycles/rad"}
     nodes_da = xr.DataArray(nodes, dims=all_dims, coords=coords,
@@ -502,14 +495,18 @@ def _gauss_legendre_sensors(c, ifov, *, nodes_per_panel, panels_per_oscillation,
 
 
 def edge_rule_arrays(cutoff, ifov_x, ifov_y, **knobs):
-    """:func:`edge_nodes` of one sensor on plain arrays: nodes, weights, sine abscissae.
+    """:func:`edge_nodes` on plain arrays: nodes, weights, sine abscissae.
 
-    ``cutoff``, ``ifov_x`` and ``ifov_y`` are 0-d; the result's arrays are 1-D over the
-    nodes.
+    ``cutoff``, ``ifov_x`` and ``ifov_y`` share one shape (0-d for one sensor); the
+    result's arrays are on (node, that shape...).
     """
     knobs = {k: v for k, v in knobs.items() if k != "name"}
     rule = knobs.pop("rule")
-    return _edge_rule(*_checked(rule, cutoff, max(ifov_x, ifov_y)), rule, **knobs)
+    c, ifov = np.asarray(cutoff), np.maximum(ifov_x, ifov_y)
+    if rule == "gauss_legendre" and knobs.get("breakpoints") is None:
+        nodes, weights = _gauss_legendre_sensors(c, ifov, **knobs)
+        return nodes, weights, nodes.copy()
+    return _rule_per_sensor(c, ifov, rule, knobs)
 
 
 def _samples_per_oscillation_kernel(count, cutoff, ifov_max):
@@ -518,8 +515,8 @@ def _samples_per_oscillation_kernel(count, cutoff, ifov_max):
 
 
 def undersampled_arrays(count, cutoff, ifov_x, ifov_y, threshold):
-    """:func:`undersampled` of one sensor with ``count`` nodes (plain arrays)."""
-    samples = _samples_per_oscillation_kernel(count, cutoff, max(ifov_x, ifov_y))
+    """:func:`undersampled` with ``count`` nodes on plain arrays."""
+    samples = _samples_per_oscillation_kernel(count, cutoff, np.maximum(ifov_x, ifov_y))
     return samples < threshold
 
 
@@ -643,16 +640,30 @@ def band_cutoff(aperture_diameter, wavelength: xr.DataArray, qe, transmission,
     xr.DataArray
         [cycles/rad]
     """
-    cutoff = optics_cutoff(aperture_diameter, wavelength, qe, transmission)
-    return cutoff.fillna(aperture_diameter / wavelength_min)
+    spectral = [(a if "wavelength" in a.dims else a.broadcast_like(wavelength))
+                if isinstance(a, xr.DataArray) else xr.full_like(wavelength, a)
+                for a in (qe, transmission)]
+    band = ["wavelength"]
+    out = apply_orchestrator(band_cutoff_arrays, CUTOFF_OUTPUTS, aperture_diameter, wavelength,
+                             *spectral, wavelength_min, core=[[], band, band, band, []])
+    return out["cutoff_frequency"]
+
+
+CUTOFF_OUTPUTS = outputs(Output("cutoff_frequency", "cycles/rad",
+                                "optics cutoff frequency D/lambda_min", carries=("sensor",)))
+"""What :func:`band_cutoff_arrays` returns."""
 
 
 def band_cutoff_arrays(aperture_diameter, wavelength, qe, transmission, wavelength_min):
-    """:func:`band_cutoff` on the plain arrays of one sensor."""
+    """:func:`band_cutoff` on plain arrays (:data:`CUTOFF_OUTPUTS`).
+
+    ``qe`` and ``transmission`` are on the band's wavelengths (last axis) or 0-d.
+    """
     spectral = [np.asarray(a) for a in (qe, transmission)]
     cutoff = _cutoff_kernel(aperture_diameter, wavelength,
                             *(a if a.ndim else a[..., np.newaxis] for a in spectral))
-    return np.where(np.isnan(cutoff), aperture_diameter / wavelength_min, cutoff)
+    fallback = aperture_diameter / wavelength_min
+    return {"cutoff_frequency": np.where(np.isnan(cutoff), fallback, cutoff)}
 
 
 #: Below this RER (geometric mean) the edge-response quadrature is not converged: over 240
@@ -680,4 +691,5 @@ def undersampled(nodes, cutoff, ifov_x, ifov_y, threshold):
     xr.DataArray
         Boolean, True where the edge response of a uniform rule may be inaccurate.
     """
-    return samples_per_oscillation(nodes, cutoff, ifov_x, ifov_y) < threshold
+    return apply_kernel(undersampled_arrays, nodes.sizes["frequency"], cutoff, ifov_x, ifov_y,
+                        threshold, dtype=bool)

@@ -22,8 +22,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .._kernels import apply_kernel, dataset
-from .._metadata import Output, declared, named, outputs
+from .._kernels import apply_kernel, apply_orchestrator, dataset
+from .._metadata import Output, named, outputs
 
 __all__ = [
     "EHO_POSITIONS",
@@ -306,28 +306,40 @@ def slice_terms(filtered, unfiltered, ifov, weights, edge_otf: str) -> xr.Datase
     xr.Dataset
         :data:`SLICE_OUTPUTS` and ``rer_unfiltered_x``, ``rer_unfiltered_y``.
     """
-    def edge(system):
-        return edge_terms(abs(system) if edge_otf == "abs" else system, ifov, weights)
-
-    sliced = edge(filtered)
-    rer_unfiltered = sliced["rer"] if unfiltered is None else edge(unfiltered)["rer"]
-    by_orientation = {o: sliced.sel(orientation=o, drop=True) for o in ("x", "y")}
-    out = {f"{name}_{o}": by_orientation[o][name] for name in ("rer", "eho") for o in ("x", "y")}
-    out["rer"] = xr.apply_ufunc(_rer_mean_kernel, out["rer_x"], out["rer_y"], dask="allowed")
-    out["eho"] = xr.apply_ufunc(_eho_mean_kernel, out["eho_x"], out["eho_y"], dask="allowed")
-    out = {name: declared(out[name], o) for name, o in SLICE_OUTPUTS.items()}
-    return dataset({**out, **{f"rer_unfiltered_{o}": rer_unfiltered.sel(orientation=o, drop=True)
-                              for o in ("x", "y")}})
+    abscissa = weights.coords["sine_frequency"] if "sine_frequency" in weights.coords else (
+        weights["frequency"])
+    otfs = [None if otf is None else otf.reset_coords(drop=True)
+            for otf in (filtered, unfiltered)]
+    slice_, orientation = ["frequency", "orientation"], ["orientation"]
+    out = apply_orchestrator(
+        slice_terms_arrays, _ALL_SLICE_OUTPUTS, *otfs, weights.reset_coords(drop=True),
+        abscissa.reset_coords(drop=True), ifov,
+        core=[slice_, slice_, ["frequency"], ["frequency"], orientation], edge_otf=edge_otf)
+    return dataset(out)
 
 
-def slice_terms_arrays(filtered, unfiltered, ifov, weights, abscissa, edge_otf: str) -> dict:
-    """:func:`slice_terms` on plain arrays: OTFs over (frequency, orientation), ifov (x, y)."""
+_ALL_SLICE_OUTPUTS = outputs(
+    *SLICE_OUTPUTS.values(),
+    *(Output(f"rer_unfiltered_{o}", "1", f"relative edge response along {o} without the "
+             "post-processing filter", references="IBSM Eq. 3-61") for o in ("x", "y")),
+)
+
+
+def slice_terms_arrays(filtered, unfiltered, weights, abscissa, ifov, edge_otf: str) -> dict:
+    """:func:`slice_terms` on plain arrays (:data:`SLICE_OUTPUTS` and the unfiltered RERs).
+
+    OTFs on (..., frequency, orientation), weights and abscissae on (..., frequency), ifov
+    on (..., orientation); orientations x, y in that order.
+    """
     def edge(system):
         system = np.abs(system) if edge_otf == "abs" else system
-        return _edge_terms_kernel(system.T, weights, abscissa, ifov)
+        return _edge_terms_kernel(np.swapaxes(system, -1, -2), weights[..., None, :],
+                                  abscissa[..., None, :], ifov)
 
-    (rer_x, rer_y), (eho_x, eho_y) = edge(filtered)
-    unfiltered_x, unfiltered_y = (rer_x, rer_y) if unfiltered is None else edge(unfiltered)[0]
+    rer, eho = edge(filtered)
+    rer_x, rer_y, eho_x, eho_y = rer[..., 0], rer[..., 1], eho[..., 0], eho[..., 1]
+    unfiltered = rer if unfiltered is None else edge(unfiltered)[0]
+    unfiltered_x, unfiltered_y = unfiltered[..., 0], unfiltered[..., 1]
     return {"rer_x": rer_x, "rer_y": rer_y, "eho_x": eho_x, "eho_y": eho_y,
             "rer": _rer_mean_kernel(rer_x, rer_y), "eho": _eho_mean_kernel(eho_x, eho_y),
             "rer_unfiltered_x": unfiltered_x, "rer_unfiltered_y": unfiltered_y}
