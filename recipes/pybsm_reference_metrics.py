@@ -1,4 +1,4 @@
-"""Write pyBSM 0.16.1 reference values for tests/test_metrics.py.
+"""Write pyBSM 0.16.1 reference values for tests/metrics/test_metrics.py.
 
 Run from the repository root with the pyBSM environment (never imported by
 xbsm; how to make it: ``recipes/README.md``)::

@@ -25,7 +25,7 @@ from xbsm.atmosphere._profile import profile_of  # the profile itself, tested he
 from xbsm.examples import olson_scenario, olson_sensor
 from xbsm.flags import FLAGS, has_flag
 
-FIXTURES = Path(__file__).parent / "fixtures"
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 IHAZE_TO_VISIBILITY = {1: 23.0, 2: 5.0}
 
 

@@ -17,7 +17,7 @@ from scipy.special import erf, ndtr, struve
 import xbsm
 from xbsm import flags, metrics, quadrature
 
-FIXTURES = pathlib.Path(__file__).parent / "fixtures"
+FIXTURES = pathlib.Path(__file__).resolve().parents[1] / "fixtures"
 REF = np.load(FIXTURES / "pybsm_metrics.npz")
 IFOV = 1e-5  # [rad]
 

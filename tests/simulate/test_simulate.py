@@ -33,8 +33,8 @@ from xbsm.simulate import (
 )
 from xbsm.simulate.sampling import sampling
 
-FIXTURE = Path(__file__).parent / "fixtures" / "pybsm_simulate.npz"
-DOCS = Path(__file__).resolve().parents[1] / "docs"
+FIXTURE = Path(__file__).resolve().parents[1] / "fixtures" / "pybsm_simulate.npz"
+DOCS = Path(__file__).resolve().parents[2] / "docs"
 
 # A visible camera (Q = lambda_min F / p = 0.9) at 3 km altitude, 4 km ground range, no
 # turbulence; a 4 mm reference GSD is about 3 reference pixels per camera pixel.
