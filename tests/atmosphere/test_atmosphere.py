@@ -194,7 +194,7 @@ def test_every_interpolation_returns_database_nodes_exactly(db, interpolation):
 
 def test_linear_reproduces_pybsm_load_database_atmosphere_bit_for_bit():
     # tests/fixtures/atmosphere_pybsm_linear.json: pybsm.utils.load_database_atmosphere
-    # of pyBSM 0.16.1 (NumPy 2.3.5), made by recipes/pybsm_reference_atmosphere.py
+    # of pyBSM 0.16.1 (NumPy 2.3.5), made by recipes/fixtures/pybsm_reference_atmosphere.py
     fixture = json.loads((FIXTURES / "atmosphere_pybsm_linear.json").read_text())
     rows = fixture["wavelength_index"]
     for p in fixture["points"]:
@@ -228,7 +228,7 @@ def _index(nodes, value):
 
 
 def test_leave_one_out_ground_range_log_beats_linear_as_documented(db):
-    # docs/atmosphere.md (recipes/atmosphere_leave_one_out.py); pyBSM notes 2.1:
+    # docs/atmosphere.md (recipes/evidence/atmosphere_leave_one_out.py); pyBSM notes 2.1:
     # ihaze 2, altitude 1 km, 11 km rebuilt from the 10 and 12 km tables
     v, a, g = 1, _index(db.altitude, 1000.0), _index(db.ground_range, 11000.0)
     w045, w060 = 15, 30  # 0.45 um, 0.60 um
@@ -314,7 +314,7 @@ def _altitude_leave_one_out(db, rule, wavelength_index, components=(0, 4)):
 
 
 @pytest.mark.parametrize(("old_rule", "new_rule", "bound"), [
-    # recipes/atmosphere_leave_one_out.py (docs/atmosphere.md), 6 wavelengths, both
+    # recipes/evidence/atmosphere_leave_one_out.py (docs/atmosphere.md), 6 wavelengths, both
     # visibilities, TRANS and GRND_RFLT: same-elevation median 0.36 % against log-linear's
     # 0.90 %, 95th percentile 6.6 % against 13.0 %; optical-depth-cubic 0.08 % and 2.8 %
     ("log-linear", "same-elevation", 0.07),
@@ -337,7 +337,7 @@ def test_extinction_profile_meets_three_percent_in_the_altitude_leave_one_out(db
     # issue 12's target: each interior table rebuilt from the others (neighbours twice the
     # real spacing apart), 95th percentile of |relative error| at most 3 % for each
     # attenuated component, medians no worse than optical-depth-cubic's. Measured
-    # (recipes/atmosphere_leave_one_out.py): TRANS 1.9 %, SURF_EMIS 2.7 %, GRND_RFLT 2.0 %
+    # (recipes/evidence/atmosphere_leave_one_out.py): TRANS 1.9 %, SURF_EMIS 2.7 %, GRND_RFLT 2.0 %
     # (optical-depth-cubic 2.8 %, 4.0 %, 3.1 %); medians 0.06-0.09 % (0.08-0.12 %)
     wavelengths = [int(np.argmin(np.abs(db.wavelength - w * 1e-6)))
                    for w in (0.45, 0.6, 1.0, 2.2, 4.0, 10.0)]

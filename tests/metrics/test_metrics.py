@@ -202,7 +202,7 @@ def _rel(a, b):
 
 @pytest.mark.parametrize("group", [0, 1, 2, 3])
 def test_edge_response_parity_with_pybsm(group):
-    # tests/fixtures/pybsm_metrics.npz, written by recipes/pybsm_reference_metrics.py
+    # tests/fixtures/pybsm_metrics.npz, written by recipes/fixtures/pybsm_reference_metrics.py
     slices = REF[f"er{group}_slices"]
     nodes, w = quadrature.uniform_trapezoid_rule(slices.shape[1], float(REF[f"er{group}_df"]))
     h = slice_da(slices, nodes)

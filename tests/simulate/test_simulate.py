@@ -93,7 +93,7 @@ def _parity_run(case_id):
 @pytest.mark.parametrize("case_id", _case_ids())
 def test_pybsm_noiseless_outputs_are_reproduced(case_id):
     # expected: pyBSM 0.16.1's simulate_image / ImageSimulator outputs on the same inputs
-    # (tests/fixtures/pybsm_simulate.npz, recipes/pybsm_reference_simulate.py). 1e-6
+    # (tests/fixtures/pybsm_simulate.npz, recipes/fixtures/pybsm_reference_simulate.py). 1e-6
     # relative: the blurred images agree to 1.7e-7 at worst; that remainder is pyBSM's
     # obscured-aperture OTF jumping by 2 eta^2 / (1 - eta^2) at grid points that fall
     # exactly on rho = (1 - eta) / 2 D / lambda (docs/quirks.md, "Image simulation").

@@ -38,7 +38,7 @@ is the fixed cost of one model call and of one chunk file.
 
 Run from the repository root with the project environment (see ``recipes/README.md``)::
 
-    .venv/bin/python recipes/bench_study.py [--scenarios-scale 1.0] [--repeats 3]
+    .venv/bin/python recipes/bench/bench_study.py [--scenarios-scale 1.0] [--repeats 3]
         [--study FILE ...] [--checkout PATH ...] [--no-chunk-overhead] [--out PATH]
 """
 
@@ -56,10 +56,12 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # recipes/: the shared helpers
+
 import psutil
 from _provenance import commit, machine
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 STUDY = ROOT / "recipes" / "studies" / "million.toml"
 STUDIES = (STUDY, ROOT / "recipes" / "studies" / "optics_million.toml")
 #: the sweep --scenarios-scale shortens in each shipped study (else the longest one)

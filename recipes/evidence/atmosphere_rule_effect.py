@@ -12,7 +12,7 @@ Writes ``docs/benchmarks/atmosphere_rule_effect.json``.
 
 Run from the repository root with the project environment::
 
-    .venv/bin/python recipes/atmosphere_rule_effect.py
+    .venv/bin/python recipes/evidence/atmosphere_rule_effect.py
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import xarray as xr
 
 import xbsm
 
-OUT = Path(__file__).resolve().parent.parent / "docs" / "benchmarks" / "atmosphere_rule_effect.json"
+OUT = Path(__file__).resolve().parents[2] / "docs" / "benchmarks" / "atmosphere_rule_effect.json"
 ALTITUDES = {"database altitudes": [1000.0, 2000.0, 3000.0, 5000.0],
              "halfway between database altitudes": [1500.0, 2500.0, 3500.0, 5500.0]}
 RULES = ("log-linear", "same-elevation", "optical-depth-cubic",

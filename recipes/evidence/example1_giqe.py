@@ -23,13 +23,16 @@ thread, through ``recipes/_pybsm_runner.py``) computes ``niirs`` and
 Run from the repository root with the project environment (pyBSM's own
 environment is made on first use, see ``recipes/README.md``)::
 
-    .venv/bin/python recipes/example1_giqe.py [--figures docs/figures/example1]
+    .venv/bin/python recipes/evidence/example1_giqe.py [--figures docs/figures/example1]
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # recipes/: the shared helpers
 
 from _pybsm_runner import CHILD_PRELUDE, run_child
 
@@ -39,7 +42,7 @@ from xbsm.cli import default_study_path
 from xbsm.examples import olson_sensor_parameters
 from xbsm.pybsm_compat import SENSOR_NAMES
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 FIGURES = ROOT / "docs" / "figures" / "example1"
 BANDS = ("red", "nir")
 VISIBILITIES = {23.0: 1, 5.0: 2}  # km -> MODTRAN IHAZE, the pyBSM scenario's ihaze

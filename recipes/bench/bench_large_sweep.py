@@ -8,7 +8,7 @@ memory of the process; ``docs/benchmarks.md`` quotes one run.
 
 Run from the repository root with the project environment (see ``recipes/README.md``)::
 
-    .venv/bin/python recipes/bench_large_sweep.py [--scenarios 200000] [--chunk 20000]
+    .venv/bin/python recipes/bench/bench_large_sweep.py [--scenarios 200000] [--chunk 20000]
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ Several checkouts are measured in turns, so
 Run from the repository root, e.g. with the issue's starting point in a worktree::
 
     git worktree add ../before 391ccfe
-    .venv/bin/python recipes/study_setup_scaling.py --checkout . --checkout ../before
+    .venv/bin/python recipes/bench/study_setup_scaling.py --checkout . --checkout ../before
 
 Writes ``docs/benchmarks/study_setup_scaling.json``.
 """
@@ -33,9 +33,11 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # recipes/: the shared helpers
+
 from _provenance import commit, machine
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 STUDY = ROOT / "recipes" / "studies" / "million.toml"
 
 #: chunk count -> chunk lengths that give it on the million study's grid

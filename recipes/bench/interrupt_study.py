@@ -67,7 +67,7 @@ run keep their previous entry in that file.
 
 Run from the repository root with the project environment::
 
-    .venv/bin/python recipes/interrupt_study.py [--scenarios race,signals] [--race-tries 10]
+    .venv/bin/python recipes/bench/interrupt_study.py [--scenarios race,signals] [--race-tries 10]
         [--signal-tries 30] [--sigterm-tries 4] [--open-tries 8] [--damage-tries 1]
         [--compute-tries 20]
 """
@@ -88,6 +88,8 @@ import threading
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # recipes/: the shared helpers
+
 import netCDF4
 import numpy as np
 import xarray as xr
@@ -95,7 +97,7 @@ from _provenance import commit, machine
 
 from xbsm.atmosphere import database_path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 STUDY = ROOT / "recipes" / "studies" / "interrupt.toml"
 HANG_SECONDS = 30.0  # a child still alive this long after its signal is a hang (killed)
 EXIT_LIMIT = 3.0  # issue 20: a signal is honoured within 3 s
@@ -916,8 +918,9 @@ def main():
                "mixed_or_stale_cells": sum(s["mixed_or_stale_cells"] for s in table.values()),
                "failures": sum(s["failures"] for s in table.values()),
                **_refusal_summary(scenarios)}
-    args.out.write_text(json.dumps({"recipe": "recipes/interrupt_study.py", "summary": overall,
-                                    "per_scenario": table, "scenarios": scenarios}, indent=1)
+    args.out.write_text(json.dumps({"recipe": "recipes/bench/interrupt_study.py",
+                                    "summary": overall, "per_scenario": table,
+                                    "scenarios": scenarios}, indent=1)
                         + "\n")
     print(f"\n{'scenario':<10} {'tries':>5} {'hangs':>5} {'cells':>6} {'fail':>4} "
           f"{'latency median/max s':>21}  exit codes")

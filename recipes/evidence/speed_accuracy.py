@@ -54,7 +54,7 @@ Run from the repository root with the project environment; pyBSM's own
 environment is made on first use, or ``$PYBSM_PYTHON`` names one (about 6 min
 on a 2-core machine; ``--quick`` about 2 min; see ``recipes/README.md``)::
 
-    .venv/bin/python recipes/speed_accuracy.py [--quick]
+    .venv/bin/python recipes/evidence/speed_accuracy.py [--quick]
 """
 
 from __future__ import annotations
@@ -63,9 +63,12 @@ import argparse
 import json
 import os
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # recipes/: the shared helpers
 
 import numpy as np
 import xarray as xr
@@ -78,7 +81,7 @@ from xbsm.model import niirs
 from xbsm.quadrature import pybsm_slice_count
 
 HERE = Path(__file__).resolve().parent
-DOCS = HERE.parent / "docs"
+DOCS = HERE.parents[1] / "docs"
 GIQE = (3, 4, 5)
 
 GROUND_RANGES = np.concatenate([[0.0, 100.0, 500.0], np.arange(1000.0, 20001.0, 1000.0),
@@ -502,7 +505,7 @@ def main():
     result = {
         "load_average_at_start": os.getloadavg(),
         "description": __doc__.split("\n\n")[0],
-        "command": "python recipes/speed_accuracy.py" + (" --quick" if args.quick else ""),
+        "command": "python recipes/evidence/speed_accuracy.py" + (" --quick" if args.quick else ""),
         "quick": args.quick, "repeats": args.repeats, "machine": machine(),
         "timing": "median wall time of one xbsm.niirs call on the whole sweep (after a "
                   "warm-up call; timed in rounds over all configurations) divided by the "

@@ -64,7 +64,7 @@ writes to ``xbsm_preset_error/`` in the system's temporary folder unless
 ``--out`` is given). Run from the repository root with the project
 environment (about 7-10 min on a shared 2-core machine)::
 
-    .venv/bin/python recipes/preset_error.py [--cases 240]
+    .venv/bin/python recipes/evidence/preset_error.py [--cases 240]
 """
 
 from __future__ import annotations
@@ -75,9 +75,12 @@ import json
 import math
 import os
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # recipes/: the shared helpers
 
 import numpy as np
 import xarray as xr
@@ -86,7 +89,7 @@ from _provenance import commit, machine
 import xbsm
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
+ROOT = HERE.parents[1]
 DEFAULT_OUT = ROOT / "docs" / "benchmarks" / "preset_error.json"
 GIQE = (3, 4, 5)
 SEED = 20260422
@@ -775,7 +778,7 @@ def main():
                             "jitter_px": s["jitter_x"] / ifov, **cases[i]})
     result = {
         "description": __doc__.split("\n\n")[0],
-        "command": f"python recipes/preset_error.py --cases {args.cases} "
+        "command": f"python recipes/evidence/preset_error.py --cases {args.cases} "
                    f"--grid-cases {args.grid_cases} --timing-cases {args.timing_cases} "
                    f"--sweep {args.sweep}",
         "git": git, "machine": machine(),

@@ -36,7 +36,7 @@ fixed noise seed and OpenCV on one thread. Needs the ``faces`` extra (OpenCV
 below 5); run from the repository root::
 
     pip install ".[faces]"
-    python recipes/face_detection.py [--out recipes/_cache/face_detection.nc]
+    python recipes/evidence/face_detection.py [--out recipes/_cache/face_detection.nc]
                                      [--figures docs/figures/example2] [--seed 0]
                                      [--upsample 1]
 """
@@ -66,7 +66,7 @@ except ModuleNotFoundError:
     raise SystemExit("OpenCV is missing: install the recipe's extra from the repository root,\n"
                      '    pip install ".[faces]"\n(opencv-python-headless below 5)') from None
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 CACHE = ROOT / "recipes" / "_cache" / "faces"
 FIGURES = ROOT / "docs" / "figures" / "example2"
 
@@ -549,7 +549,7 @@ def table(ds: xr.Dataset, dim: str, by: str) -> str:
 
 
 def provenance(wheels: dict, frames: list[Frame], dropped: list[str], seed: int) -> dict:
-    return {"source": "recipes/face_detection.py (paper Example 2, Sec. 4)",
+    return {"source": "recipes/evidence/face_detection.py (paper Example 2, Sec. 4)",
             "xbsm_version": xbsm.__version__,
             "opencv_version": cv2.__version__, "seed": seed,
             "wheels": " ".join(p.name for p in wheels.values()),

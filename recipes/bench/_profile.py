@@ -1,7 +1,7 @@
 """Where the time of an xbsm call goes: cProfile time grouped by xbsm module.
 
-Shared by ``recipes/bench_single.py`` (one scalar ``xbsm.niirs`` call) and
-``recipes/bench_niirs.py`` (the Olson sweep). The self time of every function is
+Shared by ``recipes/bench/bench_single.py`` (one scalar ``xbsm.niirs`` call) and
+``recipes/bench/bench_niirs.py`` (the Olson sweep). The self time of every function is
 attributed to the innermost xbsm module on the call stack (``atmosphere``,
 ``radiometry``, ``noise``, ``quadrature``, ``otf.*``, ``metrics.*``, ``model``,
 ``params``, ``geometry``, ``_kernels``, ``_metadata``, ``flags``, ...), split into

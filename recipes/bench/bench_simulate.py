@@ -1,6 +1,6 @@
 """Benchmark: image simulation, one 512 x 512 image at 20 ranges, xbsm against pyBSM 0.16.1.
 
-The camera is the visible camera of ``recipes/pybsm_reference_simulate.py``
+The camera is the visible camera of ``recipes/fixtures/pybsm_reference_simulate.py``
 (D = 0.2 m, f = 4 m, 10 um pixels, 0.45-0.70 um, 4 ms, 12 bits) at 3 km
 altitude, 20 ground ranges from 2 to 22 km (database nodes), 23 km visibility,
 turbulence on; the reference image is a fixed synthetic 512 x 512 scene
@@ -26,7 +26,7 @@ with the machine and the commit; ``docs/benchmarks.md`` quotes them.
 Run from the repository root with the project environment; pyBSM's own
 environment is made on first use (see ``recipes/README.md``)::
 
-    .venv/bin/python recipes/bench_simulate.py [--repeats 3] [--methods accurate fast]
+    .venv/bin/python recipes/bench/bench_simulate.py [--repeats 3] [--methods accurate fast]
 """
 
 from __future__ import annotations
@@ -39,10 +39,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # recipes/: the shared helpers
+
 from _provenance import commit, machine
 from _pybsm_runner import CHILD_PRELUDE, run_child
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "docs" / "benchmarks" / "bench_simulate.json"
 IMAGES = 20
 

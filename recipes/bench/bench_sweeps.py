@@ -86,7 +86,7 @@ model.
 
 Run from the repository root with the project environment (see ``recipes/README.md``)::
 
-    .venv/bin/python recipes/bench_sweeps.py [--repeats 3] [--checkout PATH ...]
+    .venv/bin/python recipes/bench/bench_sweeps.py [--repeats 3] [--checkout PATH ...]
         [--rows focal_length ...] [--methods accurate fast] [--scale 1.0]
 
 ``--scale 0.1`` shrinks every sweep tenfold for a quick look (do not commit its
@@ -112,7 +112,9 @@ import time
 import types
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # recipes/: the shared helpers
+
+ROOT = Path(__file__).resolve().parents[2]
 BASE_SCENARIO = dict(altitude=9000.0, ground_range=20_250.0, visibility=23.0,
                      platform_speed=100.0)
 CROSS_RANGES = [250.0 + 1000.0 * i for i in range(100)]  # 0.25-99.25 km, off most nodes

@@ -15,8 +15,8 @@ copy of the database with the tables removed, so the numbers are those of
 Run from the repository root with the project environment (numbers go to
 docs/atmosphere.md; see ``recipes/README.md``)::
 
-    .venv/bin/python recipes/atmosphere_leave_one_out.py
-    .venv/bin/python recipes/atmosphere_leave_one_out.py --candidates  # that table only
+    .venv/bin/python recipes/evidence/atmosphere_leave_one_out.py
+    .venv/bin/python recipes/evidence/atmosphere_leave_one_out.py --candidates  # that table only
 
 The candidate rules (``CANDIDATES``) interpolate across altitude through more than the
 two bracketing tables; the first, "cubic, optical path H=2 km", is the package's

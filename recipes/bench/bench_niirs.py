@@ -12,7 +12,7 @@ once more per method under cProfile, its time grouped by xbsm stage/module
 (``atmosphere``, ``radiometry``, ``noise``, ``quadrature``, ``otf.*``,
 ``metrics.*``, ``model``, ``params``, ``geometry``, ``_kernels``,
 ``_metadata``, ``flags``) with "xarray overhead" split out, by the rule of
-``recipes/_profile.py`` (shared with ``bench_single.py``); the microseconds
+``recipes/bench/_profile.py`` (shared with ``bench_single.py``); the microseconds
 per scenario of each stage are its share times the unprofiled median. Writes
 ``docs/benchmarks/bench_niirs.json`` and ``docs/figures/bench_niirs.png``;
 ``docs/benchmarks.md`` quotes them.
@@ -20,7 +20,7 @@ per scenario of each stage are its share times the unprofiled median. Writes
 Run from the repository root with the project environment; pyBSM's own
 environment is made on first use (see ``recipes/README.md``)::
 
-    .venv/bin/python recipes/bench_niirs.py [--repeats 3]
+    .venv/bin/python recipes/bench/bench_niirs.py [--repeats 3]
 """
 
 from __future__ import annotations
@@ -30,8 +30,11 @@ import json
 import os
 import platform
 import statistics
+import sys
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # recipes/: the shared helpers
 
 import numpy as np
 import xarray as xr
@@ -42,7 +45,7 @@ from _pybsm_runner import run_pybsm
 import xbsm
 from xbsm.examples import DATABASE_GROUND_RANGES, OLSON_BANDS, olson_scenario, olson_sensor
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 FOCAL_LENGTHS = np.linspace(2.0, 6.0, 25)
 METHODS = ("pybsm", "fast", "accurate")
@@ -90,7 +93,7 @@ def time_xbsm(method, repeats):
 
 
 def profile_sweep(method, per_scenario_s):
-    """The timed sweep once under cProfile, grouped by xbsm module (recipes/_profile.py)."""
+    """The timed sweep once under cProfile, grouped by xbsm module (recipes/bench/_profile.py)."""
     f = xr.DataArray(FOCAL_LENGTHS, dims="focal_length")
     sensors = [olson_sensor(band, focal_length=f) for band in OLSON_BANDS]
     scenario = olson_scenario()

@@ -6,7 +6,7 @@ single (scalar) scenarios:
 - ``olson_red``: the paper's Olson camera (Table 2), red band, 9 km altitude,
   20 km ground range, 5 km visibility (xbsm: ``xbsm.examples.olson_sensor("red")``
   and ``olson_scenario(ground_range=20000.0, visibility=5.0)``; pyBSM: the same
-  camera as ``recipes/bench_niirs.py`` builds it);
+  camera as ``recipes/bench/bench_niirs.py`` builds it);
 - ``mwir_narrow``: fixture case ``case117_mwir_narrow`` of
   ``tests/fixtures/pybsm_cases.json`` (3.6-4.2 um, cold filter, 9 km altitude,
   24 km ground range, turbulence, sharpening kernel, 4 stacked frames);
@@ -29,7 +29,7 @@ that both see about the same machine load; the load average is recorded at
 each step.
 
 Then one xbsm ``niirs`` call per method on ``olson_red`` runs under cProfile
-(the grouping lives in ``recipes/_profile.py``, shared with ``bench_niirs.py``);
+(the grouping lives in ``recipes/bench/_profile.py``, shared with ``bench_niirs.py``);
 its time is attributed to the innermost xbsm module on the call stack
 (``atmosphere``, ``radiometry``, ``noise``, ``otf.*``, ``quadrature``,
 ``metrics``, ``model``, ``params``, ...), split into that module's own code
@@ -47,7 +47,7 @@ average at start and end, versions, commit, every timing and the profile); ``doc
 quotes it. Run from the repository root with the project environment;
 pyBSM's own environment is made on first use (see ``recipes/README.md``)::
 
-    .venv/bin/python recipes/bench_single.py [--calls 20] [--out PATH]
+    .venv/bin/python recipes/bench/bench_single.py [--calls 20] [--out PATH]
 """
 
 from __future__ import annotations
@@ -61,6 +61,8 @@ import sys
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # recipes/: the shared helpers
+
 import numpy as np
 import xarray as xr
 from _profile import print_by_module, profile_call, stack_shares
@@ -70,7 +72,7 @@ from _pybsm_runner import CHILD_PRELUDE, run_child
 import xbsm
 from xbsm.examples import olson_scenario, olson_sensor
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 sys.path.insert(0, str(ROOT / "tests"))
 import pybsm_cases  # noqa: E402  (tests/pybsm_cases.py: fixture case -> xbsm datasets)
@@ -223,7 +225,7 @@ def agreement(build, pybsm_values):
 # ---------------------------------------------------------------- profile
 
 def profile_niirs(build, method):
-    """One xbsm.niirs call under cProfile, grouped by module (``recipes/_profile.py``)."""
+    """One xbsm.niirs call under cProfile, grouped by module (``recipes/bench/_profile.py``)."""
     s, sc = build()
     xbsm.niirs(s, sc, method=method)  # warm
     t0 = time.perf_counter()
@@ -326,7 +328,7 @@ def main():
 
     t_start = time.perf_counter()
     record = {"description": __doc__.split("\n\n")[0],
-              "command": "python recipes/bench_single.py" + (
+              "command": "python recipes/bench/bench_single.py" + (
                   f" --calls {args.calls}" if args.calls != 20 else "") + (
                   f" --out {args.out}" if args.out != parser.get_default("out") else ""),
               "load_average_at_start": os.getloadavg(), "date": time.strftime("%Y-%m-%d"),

@@ -9,11 +9,11 @@ the shared machine falls on all of them alike. Prints microseconds per scenario
 (median and minimum over the rounds) and writes
 ``docs/benchmarks/bench_atmosphere_rules.json``. No pyBSM counterpart: its
 ``load_database_atmosphere`` handles one scenario per call and re-reads the decoder
-CSV each time (``recipes/bench_single.py`` times whole calls against pyBSM).
+CSV each time (``recipes/bench/bench_single.py`` times whole calls against pyBSM).
 
 Run from the repository root with the project environment::
 
-    .venv/bin/python recipes/bench_atmosphere_rules.py [--repeats 5]
+    .venv/bin/python recipes/bench/bench_atmosphere_rules.py [--repeats 5]
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ import numpy as np
 
 from xbsm.atmosphere import INTERPOLATIONS, interpolate_database, load_database
 
-OUT = Path(__file__).resolve().parent.parent / "docs" / "benchmarks" / "bench_atmosphere_rules.json"
+OUT = Path(__file__).resolve().parents[2] / "docs" / "benchmarks" / "bench_atmosphere_rules.json"
 WINDOWS_UM = {"0.4-0.9 um": (0.4, 0.9), "8-12 um": (8.0, 12.0)}
 RULES = tuple(r for r in INTERPOLATIONS if r != "exact")
 

@@ -15,7 +15,7 @@ table in ``docs/benchmarks.md`` quotes them.
 Run from the repository root with the project environment; pyBSM's own
 environment is made on first use (see ``recipes/README.md``)::
 
-    .venv/bin/python recipes/bench_snr.py [--sample 200] [--repeats 5]
+    .venv/bin/python recipes/bench/bench_snr.py [--sample 200] [--repeats 5]
 """
 
 from __future__ import annotations
@@ -24,8 +24,11 @@ import argparse
 import json
 import platform
 import statistics
+import sys
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # recipes/: the shared helpers
 
 import numpy as np
 import xarray as xr
@@ -34,7 +37,7 @@ from _pybsm_runner import run_pybsm
 import xbsm
 from xbsm.atmosphere import VISIBILITIES
 
-DOCS = Path(__file__).resolve().parent.parent / "docs"
+DOCS = Path(__file__).resolve().parents[2] / "docs"
 GROUND_RANGES = np.array(xbsm.atmosphere.GROUND_RANGES)  # every database ground range
 FOCAL_LENGTHS = np.linspace(2.0, 6.0, 25)
 ALTITUDES = (9000.0, 12000.0)

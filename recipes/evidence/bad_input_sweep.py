@@ -36,7 +36,7 @@ small tables; each carries its oracle as text in the JSON.
 
 Usage (from the repository root)::
 
-    .venv/bin/python recipes/bad_input_sweep.py [--out PATH] [--only SUBSTRING]
+    .venv/bin/python recipes/evidence/bad_input_sweep.py [--out PATH] [--only SUBSTRING]
 
 Writes ``docs/benchmarks/bad_input_sweep.json`` (one row per case: id, entry,
 description, oracle, class, message, note) and prints the count per class and
@@ -76,7 +76,7 @@ import xbsm  # noqa: E402
 from xbsm.flags import FLAGS  # noqa: E402
 from xbsm.simulate import reflectance_to_photoelectrons  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_OUT = Path("docs/benchmarks/bad_input_sweep.json")
 MEMORY_LIMIT = 3 * 1024**3  # bytes of address space per case
 TIMEOUT = 60.0  # s per case
@@ -1617,7 +1617,8 @@ def main(argv=None) -> int:
     if changed:
         print(f"WARNING: xbsm's sources changed during the run: {after}")
     out = {
-        "description": "bad-input sweep of xbsm's public entry points (recipes/bad_input_sweep.py)",
+        "description": ("bad-input sweep of xbsm's public entry points"
+                        " (recipes/evidence/bad_input_sweep.py)"),
         **state,
         "sources_changed_during_run": changed,
         "commit_at_end": after["commit"],
