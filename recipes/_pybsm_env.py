@@ -19,13 +19,14 @@ MAKE_VENV = ("python3 -m venv recipes/_cache/pybsm-venv && "
 
 
 def missing_pybsm_message(python: str, script: str | None = None) -> str:
-    """What to do when ``python`` cannot import pyBSM (``script``: the recipe to rerun)."""
+    """What to do when ``python`` cannot import pyBSM (``script``: the recipe to rerun, its path
+    from the repository root)."""
     lines = [f"pyBSM 0.16.1 is not installed for {python}.",
              "Make its environment once, from the repository root:",
              f"    {MAKE_VENV}"]
     if script:
         lines += ["then run this recipe with it:",
-                  f"    NUMBA_NUM_THREADS=1 recipes/_cache/pybsm-venv/bin/python recipes/{script}"]
+                  f"    NUMBA_NUM_THREADS=1 recipes/_cache/pybsm-venv/bin/python {script}"]
     else:
         lines += ["or point $PYBSM_PYTHON at an interpreter that has pybsm==0.16.1."]
     lines += ["See recipes/README.md."]
@@ -40,4 +41,5 @@ def pybsm_required():
     except ModuleNotFoundError as exc:
         if exc.name != "pybsm" and not str(exc.name).startswith("pybsm."):
             raise
-        raise SystemExit(missing_pybsm_message(sys.executable, Path(sys.argv[0]).name)) from None
+        script = Path(sys.argv[0]).resolve().relative_to(VENV.parents[2])  # recipes/<group>/...
+        raise SystemExit(missing_pybsm_message(sys.executable, str(script))) from None

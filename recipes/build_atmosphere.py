@@ -21,7 +21,7 @@ What it does
 4. Writes ``tests/fixtures/atmosphere_checksums.json``: per (visibility, altitude) slab,
    the number of ground ranges present, the decoder index of the first file, the
    sha256 of the concatenated raw bytes and a crc32 per spectrum, plus a few raw values.
-   ``tests/test_atmosphere.py`` uses it to prove that the cube holds all 3430 spectra bit
+   ``tests/atmosphere/test_atmosphere.py`` uses it to prove that the cube holds all 3430 spectra bit
    for bit and nothing else.
 
 Layout and chunking

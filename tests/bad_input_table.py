@@ -1,4 +1,4 @@
-"""The bad-input table: shared by tests/test_bad_inputs.py and recipes/bad_input_sweep.py.
+"""The bad-input table: shared by tests/test_bad_inputs.py and recipes/evidence/bad_input_sweep.py.
 
 One row per bad or odd input at a public entry point. :data:`ERROR_ROWS`: the call must
 raise the exception, its message containing the fragment (the parameter's name and its

@@ -1,4 +1,4 @@
-"""Load the pyBSM 0.16.1 reference fixture (written by recipes/pybsm_reference.py)."""
+"""Load the pyBSM 0.16.1 reference fixture (written by recipes/fixtures/pybsm_reference.py)."""
 
 from __future__ import annotations
 

@@ -86,7 +86,7 @@ def test_fast_differs_from_accurate_only_in_its_documented_knobs():
 
 # --- pyBSM's NIIRS on a 1601-point grid ---------------------------------------------
 
-# From recipes/pybsm_reference_grid.py (pyBSM 0.16.1, its public functions re-run with
+# From recipes/fixtures/pybsm_reference_grid.py (pyBSM 0.16.1, its public functions re-run with
 # a 1601 x 1601 grid; bit-identical to niirs()/niirs5() at 101).
 GRID = np.load(FIXTURES / "pybsm_grid1601.npz")
 GRID_META = json.loads((FIXTURES / "pybsm_grid1601.json").read_text())
@@ -178,7 +178,7 @@ SYSTEMS = {
 
 @pytest.mark.parametrize("system", list(SYSTEMS))
 def test_accurate_is_within_1e3_niirs_of_a_16x_finer_reference(system):
-    # measured (recipes/speed_accuracy.py): <= 2.4e-6 NIIRS on these systems
+    # measured (recipes/evidence/speed_accuracy.py): <= 2.4e-6 NIIRS on these systems
     sensor = SYSTEMS[system]
     scenario = xbsm.scenario(altitude=xr.DataArray([3000.0, 9000.0], dims="altitude"),
                              ground_range=xr.DataArray([0.0, 20000.0], dims="ground_range"),

@@ -49,7 +49,7 @@ def test_parity_fixture_has_at_least_150_cases_across_bands_and_mechanisms():
     ("slant_range", "slant_range", "slant_range"),
 ])
 def test_pybsm_method_matches_pybsm_edge_and_geometry_terms(parity_results, quantity, ours, theirs):
-    # pyBSM 0.16.1 niirs / niirs5 (interp=False on nodes), recipes/pybsm_reference.py;
+    # pyBSM 0.16.1 niirs / niirs5 (interp=False on nodes), recipes/fixtures/pybsm_reference.py;
     # 1e-9 relative, or the rounding of pyBSM's own slant-range formula where that is larger
     # (RER and EHO are in pixel units and do not depend on the slant range)
     geometric = quantity in ("gsd", "gsd_w", "elevation", "slant_range")

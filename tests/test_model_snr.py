@@ -12,7 +12,7 @@ from xbsm.flags import has_flag
 
 CASES, OUTPUTS = load_cases()
 
-# xbsm name -> key in the fixture written by recipes/pybsm_reference.py (pyBSM 0.16.1
+# xbsm name -> key in the fixture written by recipes/fixtures/pybsm_reference.py (pyBSM 0.16.1
 # niirs(...).snr.*, i.e. photon_detector_SNR on the GIQE target, plus niirs' path/scene noise)
 PARITY = {
     "snr_frame": "snr",
@@ -155,7 +155,7 @@ def test_interpolated_band_edges_respond_continuously():
 @pytest.mark.parametrize("index", range(30))
 def test_reflectance_to_photoelectrons_matches_pybsm(index):
     # pyBSM 0.16.1 radiance.reflectance_to_photoelectrons (100 reflectances, 300 K target),
-    # recorded for the first 30 fixture cases by recipes/pybsm_reference.py
+    # recorded for the first 30 fixture cases by recipes/fixtures/pybsm_reference.py
     sensor, scenario = datasets(CASES[index])
     r = xbsm.simulate.reflectance_to_photoelectrons(sensor, scenario, method="pybsm")
     np.testing.assert_allclose(r.photoelectrons.values, OUTPUTS["reflectance_pe"][index],

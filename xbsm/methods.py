@@ -196,7 +196,7 @@ _PRESETS: dict[str, Method] = {
         # the transmission 0.06 % against 0.08 % for "optical-depth-cubic", 0.36 % for
         # "same-elevation" and 0.9 % for "log-linear", 95th percentile 1.9 % against 2.8 %,
         # 6.6 % and 13 %; the only rule with all three attenuated components at most 3 %
-        # (recipes/atmosphere_leave_one_out.py)
+        # (recipes/evidence/atmosphere_leave_one_out.py)
         atmosphere_interpolation="extinction-profile",
         band_edges="interpolated",
         edge_rule="gauss_legendre",
@@ -217,7 +217,7 @@ _PRESETS: dict[str, Method] = {
     ),
 }
 _PRESETS["fast"] = _PRESETS["accurate"].replace(
-    # otf_wavelengths 24, not 8: on 240 random systems (recipes/preset_error.py) 8 bins cost
+    # otf_wavelengths 24, not 8: on 240 random systems (recipes/evidence/preset_error.py) 8 bins cost
     # up to 7.3e-3 NIIRS where RER >= 0.2 and 24 bins 7.1e-4, at 1.34x the speed of accurate
     name="fast", nodes_per_panel=6, min_panels=4, otf_wavelengths=24, turbulence_path_samples=16
 )

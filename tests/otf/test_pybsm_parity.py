@@ -1,7 +1,7 @@
 """Parity with pyBSM 0.16.1 where pyBSM is correct.
 
 Reference values: tests/fixtures/pybsm_otf.npz, written by
-recipes/pybsm_reference_otf.py with pyBSM 0.16.1 (rerun it to regenerate).
+recipes/fixtures/pybsm_reference_otf.py with pyBSM 0.16.1 (rerun it to regenerate).
 pyBSM's numba kernels use fastmath, so the same formulas agree to rounding,
 not bit for bit: rtol 1e-12 with an absolute floor of 1e-14 for values near
 zero (measured worst cases are listed in docs/otf.md).

@@ -8,7 +8,7 @@ units. This module is the one place that knows the file: where it is
 follow from them, the components and their units), how to open it lazily in SI
 units (:func:`open_atmosphere`) and how to read it into memory once per process
 (:func:`load_database`). ``params``, ``examples`` and the flag texts take the facts
-from here; ``tests/test_atmosphere.py`` checks them against the file.
+from here; ``tests/atmosphere/test_atmosphere.py`` checks them against the file.
 """
 
 from __future__ import annotations

@@ -37,7 +37,7 @@ __all__ = ["Optics", "kernel_from_otf", "kernel_half_width", "nyquist_otf", "otf
 RADIAL_SAMPLES = 4097
 """Points of the radial table of the aperture and turbulence OTFs, from 0 to the grid's
 corner or the largest optics cutoff; linear interpolation (within 1e-6 of the exactly
-evaluated OTF: ``tests/test_simulate.py``)."""
+evaluated OTF: ``tests/simulate/test_simulate.py``)."""
 _RADIAL = ("aperture", "turbulence")
 _BLOCK = 4_000_000
 
