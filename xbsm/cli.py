@@ -192,9 +192,12 @@ def _command(parser, args) -> None:
 
 
 def _exit_past_hdf5(code: int) -> None:
-    """End the process without the interpreter's shutdown, where a HDF5 library that has
-    refused a write may crash (see :class:`xbsm.study.store.WriteFailed`); every file of
-    ours is already closed, removed or kept as intended, and the output lock released."""
+    """End the process without the interpreter's shutdown, where HDF5 may crash.
+
+    A HDF5 library that has refused a write may crash at exit (see
+    :class:`xbsm.study.store.WriteFailed`); every file of ours is already closed, removed
+    or kept as intended, and the output lock released.
+    """
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)
@@ -207,7 +210,6 @@ def main(argv=None) -> int:
     with handling_signals():
         try:
             from .study import StudyError  # the heavy imports, under the handlers
-
             from .study.store import WriteFailed
 
             try:

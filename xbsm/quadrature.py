@@ -667,8 +667,8 @@ def band_cutoff_arrays(aperture_diameter, wavelength, qe, transmission, waveleng
 
 
 #: Below this RER (geometric mean) the edge-response quadrature is not converged: over 240
-#: random systems (recipes/evidence/preset_error.py) accurate is within 6.2e-4 NIIRS where RER >= 0.05
-#: (1e-5 where RER >= 0.15) and off by up to 3.6 below (flag ``blur_unresolved``).
+#: random systems (recipes/evidence/preset_error.py) accurate is within 6.2e-4 NIIRS where
+#: RER >= 0.05 (1e-5 where RER >= 0.15) and off by up to 3.6 below (flag ``blur_unresolved``).
 UNRESOLVED_RER = 0.05
 
 

@@ -273,8 +273,10 @@ unfiltered system along x and y, ``rer_unfiltered_x`` and ``rer_unfiltered_y``).
 
 
 def _rer_mean_kernel(rer_x, rer_y):
-    """Geometric mean of the two slices' RER; NaN unless both are positive (the product of
-    two negative slices would otherwise pass for a resolved edge)."""
+    """Geometric mean of the two slices' RER; NaN unless both are positive.
+
+    The product of two negative slices would otherwise pass for a resolved edge.
+    """
     with np.errstate(invalid="ignore"):
         return np.where((rer_x > 0) & (rer_y > 0), np.sqrt(rer_x * rer_y), np.nan)
 
