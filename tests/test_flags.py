@@ -90,3 +90,21 @@ def test_a_one_axis_drift_with_a_negative_slice_is_nan_flagged_and_silent():
         assert np.isnan(out.niirs).all()
         assert np.isnan(out.rer).all()
         assert (out.flags.astype(np.int64) & flags.flag("rer_nonpositive")).all()
+
+
+def test_a_one_axis_smear_is_flagged_unresolved_on_its_own_slice():
+    # issue 23: Olson NIR with a drift of 109 pixels along x (IFOV 2 urad, 30 ms).
+    # `accurate` gives rer_x 0.0136 where a linear smear of L pixels has RER about 1/L =
+    # 0.0092 (the issue's dense trapezoid and scipy quad agree on 0.0091), yet the
+    # geometric mean 0.069 is above the threshold: the flag looks at the worse slice.
+    from xbsm.examples import olson_scenario, olson_sensor
+    from xbsm.quadrature import UNRESOLVED_RER
+
+    sensor = olson_sensor("nir", drift_rate_x=109 * 2e-6 / 0.03)
+    out = xbsm.niirs(sensor, olson_scenario(ground_range=0.0).isel(visibility=0),
+                     method="accurate")
+    assert float(out.rer) > UNRESOLVED_RER > float(out.rer_x)  # the case the test is about
+    assert (out.flags & flags.flag("blur_unresolved")).all()
+    # a symmetric, well-resolved system stays unflagged
+    plain = xbsm.niirs(olson_sensor("nir"), olson_scenario(ground_range=0.0).isel(visibility=0))
+    assert not (plain.flags & flags.flag("blur_unresolved")).any()

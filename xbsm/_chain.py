@@ -119,7 +119,10 @@ def _edge_chain(ap, r, atm, cutoff, view, m) -> dict:
     if m.edge_rule == "uniform_trapezoid":
         coarse = ap.undersampled(nodes, cutoff, ifov_x, ifov_y, m.undersampling_threshold)
     flags = ap.flag(ap.no_flags(), "undersampled_grid", coarse)
-    flags = ap.flag(flags, "blur_unresolved", terms["rer"] < quadrature.UNRESOLVED_RER)
+    # on the worse slice: a one-axis smear leaves the geometric mean above the threshold
+    # while its own slice is not resolved (issue 23)
+    worse = np.minimum(terms["rer_x"], terms["rer_y"])
+    flags = ap.flag(flags, "blur_unresolved", worse < quadrature.UNRESOLVED_RER)
     return {**terms, "coherence_diameter": otf["coherence_diameter"],
             "cutoff_frequency": cutoff, "ifov": ifov, "flags": flags}
 

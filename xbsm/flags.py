@@ -76,9 +76,10 @@ FLAGS = MappingProxyType({
     ),
     "blur_unresolved": (
         4096,
-        "system blurred over many pixels (RER below 0.05): the edge-response quadrature "
-        "spreads its nodes to the optics cutoff and does not resolve the narrow OTF; the "
-        "result may be wrong (measured up to 3.6 NIIRS for accurate)",
+        "system blurred over many pixels (RER of the worse slice below 0.05): the "
+        "edge-response quadrature spreads its nodes to the optics cutoff and does not "
+        "resolve the narrow OTF; the result may be wrong (measured up to 3.6 NIIRS for "
+        "accurate)",
     ),
     "partial_spectral_coverage": (
         8192,
