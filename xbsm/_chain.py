@@ -348,7 +348,7 @@ class Direct:
                                              p["wavelength_min"])["cutoff_frequency"]
 
     def noise(self, signal):
-        return noise.noise_arrays(self.sensor, signal)
+        return noise.noise_arrays(*noise.noise_inputs(self.sensor, signal))
 
     @staticmethod
     def flag(flags, name: str, condition):
@@ -392,7 +392,7 @@ class Direct:
     sampling_q = staticmethod(giqe_.sampling_q_arrays)
 
     def noise_gain(self):
-        return noise.noise_gain_arrays(self.sensor["filter_kernel"])
+        return noise.noise_gain_arrays(self.sensor["filter_kernel"])["noise_gain"]
 
     @staticmethod
     def result(values: dict, atm, m, *, flags="validity flags", **attrs) -> xr.Dataset:

@@ -204,7 +204,7 @@ def _apply_outputs(orchestrator, outputs, args, core, dask, knobs):
     results = xr.apply_ufunc(
         run, *arrays, input_core_dims=[core[i] for i in given],
         output_core_dims=[list(o.dims) for o in outputs], join=join_for(arrays), dask=dask,
-        output_dtypes=[float] * len(outputs), keep_attrs="drop",
+        output_dtypes=[float] * len(outputs), keep_attrs="override",
         dask_gufunc_kwargs={"allow_rechunk": True})
     return results if len(outputs) > 1 else (results,)
 
