@@ -389,7 +389,9 @@ class Direct:
         return quadrature.undersampled_arrays(nodes.size, cutoff, ifov_x, ifov_y, threshold)
 
     giqe = staticmethod(giqe_.giqe_arrays)
-    sampling_q = staticmethod(giqe_.sampling_q_arrays)
+    @staticmethod
+    def sampling_q(wavelength, aperture_diameter, ifov):
+        return giqe_.sampling_q_arrays(wavelength, aperture_diameter, ifov)["q"]
 
     def noise_gain(self):
         return noise.noise_gain_arrays(self.sensor["filter_kernel"])["noise_gain"]
