@@ -252,8 +252,11 @@ _SIGNAL_INPUTS = ("effective_integration_time", "target_photoelectrons",
 
 
 def noise_inputs(sensor, signal) -> tuple:
-    """The arguments of :func:`noise_arrays`, in order, from the sensor's parameters and the
-    signal stage's outputs (:data:`xbsm.radiometry.SIGNAL_OUTPUTS`), each a mapping by name."""
+    """The arguments of :func:`noise_arrays`, in order.
+
+    From the sensor's parameters and the signal stage's outputs
+    (:data:`xbsm.radiometry.SIGNAL_OUTPUTS`), each a mapping by name.
+    """
     return (*(sensor[name] for name in _SENSOR_INPUTS),
             *(signal[name] for name in _SIGNAL_INPUTS))
 
