@@ -156,6 +156,7 @@ NOT_LABELLED = MappingProxyType({
        "xbsm.atmosphere (labelled by viewing_geometry and ground_range_at_elevation)"
        for name in ("slant_and_elevation_kernel", "ground_range_at_elevation_kernel")},
     "xbsm.radiometry.is_emissive_band": "returns a bool",
+    "xbsm.noise.noise_inputs": "returns the arguments of noise_arrays, as given",
     "xbsm.radiometry.resample_spectral": "keeps the attributes of the sensor curve it resamples",
     "xbsm.quadrature.aperture_breakpoints": "returns a numpy array",
     "xbsm.quadrature.detector_breakpoints": "returns a numpy array",

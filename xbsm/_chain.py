@@ -351,7 +351,7 @@ class Direct:
                                              p["wavelength_min"])["cutoff_frequency"]
 
     def noise(self, signal):
-        return noise.noise_arrays(self.sensor, signal)
+        return noise.noise_arrays(*noise.noise_inputs(self.sensor, signal))
 
     @staticmethod
     def flag(flags, name: str, condition):
@@ -392,10 +392,12 @@ class Direct:
         return quadrature.undersampled_arrays(nodes.size, cutoff, ifov_x, ifov_y, threshold)
 
     giqe = staticmethod(giqe_.giqe_arrays)
-    sampling_q = staticmethod(giqe_.sampling_q_arrays)
+    @staticmethod
+    def sampling_q(wavelength, aperture_diameter, ifov):
+        return giqe_.sampling_q_arrays(wavelength, aperture_diameter, ifov)["q"]
 
     def noise_gain(self):
-        return noise.noise_gain_arrays(self.sensor["filter_kernel"])
+        return noise.noise_gain_arrays(self.sensor["filter_kernel"])["noise_gain"]
 
     @staticmethod
     def result(values: dict, atm, m, *, flags="validity flags", **attrs) -> xr.Dataset:

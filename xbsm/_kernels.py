@@ -125,8 +125,8 @@ def _merged_coords(arrays, dropped):
     return variables, indexes
 
 
-def apply_orchestrator(orchestrator, declared, /, *args, core=None, dask="parallelized",
-                       **knobs) -> dict:
+def apply_orchestrator(orchestrator, declared, /, *args, core=None, sizes=None,
+                       dask="parallelized", **knobs) -> dict:
     """A stage's array orchestrator run once over ``args``, its outputs labelled as declared.
 
     The labelled door of a stage: ``orchestrator(*arrays, **knobs)`` (plain arrays in,
@@ -150,6 +150,8 @@ def apply_orchestrator(orchestrator, declared, /, *args, core=None, dask="parall
         Its array arguments (None passes through: an input the stage does without).
     core : sequence of sequence of str, optional
         Core dimensions of each argument (default none).
+    sizes : mapping of str to int, optional
+        Lengths of output core dimensions that no argument has.
     dask : {"parallelized", "allowed"}
         "allowed" when the orchestrator runs on whole dask arrays (it reduces over or
         reshapes a core dimension that chunks would split).
@@ -178,13 +180,13 @@ def apply_orchestrator(orchestrator, declared, /, *args, core=None, dask="parall
             # the group's outputs do not depend on the arguments it leaves out
             given = [xr.DataArray(np.nan) if name in placeholders else a
                      for name, a in zip(names, args, strict=True)]
-            results = _apply_outputs(orchestrator, group, given, core, dask, knobs)
+            results = _apply_outputs(orchestrator, group, given, core, sizes, dask, knobs)
             for o, out in zip(group, results, strict=True):
                 labelled[o.name] = _kept(out, o, args, names)
     return {name: labelled[name] for name in declared}
 
 
-def _apply_outputs(orchestrator, outputs, args, core, dask, knobs):
+def _apply_outputs(orchestrator, outputs, args, core, sizes, dask, knobs):
     """The ``outputs`` of ``orchestrator`` over ``args`` (one ``xr.apply_ufunc``), on every dim."""
     given = [i for i, a in enumerate(args) if a is not None]  # None stays out of dask's way
     cores, count = [len(core[i]) for i in given], len(args)
@@ -204,8 +206,8 @@ def _apply_outputs(orchestrator, outputs, args, core, dask, knobs):
     results = xr.apply_ufunc(
         run, *arrays, input_core_dims=[core[i] for i in given],
         output_core_dims=[list(o.dims) for o in outputs], join=join_for(arrays), dask=dask,
-        output_dtypes=[float] * len(outputs), keep_attrs="drop",
-        dask_gufunc_kwargs={"allow_rechunk": True})
+        output_dtypes=[o.dtype for o in outputs], keep_attrs="override",
+        dask_gufunc_kwargs={"allow_rechunk": True, "output_sizes": dict(sizes or {})})
     return results if len(outputs) > 1 else (results,)
 
 

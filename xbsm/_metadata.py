@@ -81,7 +81,8 @@ class Output(NamedTuple):
     keeps (``"sensor"``, ``"scenario"``): an output that carries only the sensor keeps
     only sensor dims in a sweep. ``inputs`` names the orchestrator's arguments whose
     dims the output keeps, in the order its dims come (None: all of them); the labelled
-    door (:func:`xbsm._kernels.apply_orchestrator`) labels it so.
+    door (:func:`xbsm._kernels.apply_orchestrator`) labels it so; ``dtype`` is its
+    dtype (flags: int32).
     """
 
     name: str
@@ -91,6 +92,7 @@ class Output(NamedTuple):
     carries: tuple = ("sensor", "scenario")
     references: str | None = None
     inputs: tuple | None = None
+    dtype: type = float
 
     def attrs(self) -> dict:
         """The CF attributes of the output."""

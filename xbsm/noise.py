@@ -8,8 +8,8 @@ import numpy as np
 import xarray as xr
 
 from . import radiometry
-from ._kernels import apply_kernel, dataset
-from ._metadata import Output, declared, named, outputs
+from ._kernels import apply_kernel, apply_orchestrator, dataset
+from ._metadata import Output, named, outputs
 from .constants import CODATA
 from .params import contract
 
@@ -142,7 +142,11 @@ def quantization_noise(well_range, bit_depth):
     return apply_kernel(_quantization_noise_kernel, well_range, bit_depth)
 
 
-@contract(Output("noise_gain", "1", "noise gain"))
+_GAIN_OUTPUTS = outputs(Output("noise_gain", "1", "noise gain", carries=("sensor",)))
+"""What :func:`noise_gain_arrays` returns."""
+
+
+@contract(_GAIN_OUTPUTS["noise_gain"])
 def noise_gain(kernel: xr.DataArray):
     r"""Noise gain of a post-processing kernel (Leachtenauer et al. 1997).
 
@@ -161,12 +165,14 @@ def noise_gain(kernel: xr.DataArray):
     The kernel's sum is checked (to 1e-9) where the sensor is built, not here
     with exact float equality: [0.7, 0.2, 0.1] sums to 0.9999999999999999.
     """
-    return np.sqrt((kernel**2).sum(("kernel_y", "kernel_x")))
+    out = apply_orchestrator(noise_gain_arrays, _GAIN_OUTPUTS, kernel,
+                             core=[["kernel_y", "kernel_x"]])
+    return out["noise_gain"]
 
 
-def noise_gain_arrays(kernel):
-    """:func:`noise_gain` of a plain (kernel_y, kernel_x) array."""
-    return np.sqrt(np.sum(kernel**2))
+def noise_gain_arrays(kernel) -> dict:
+    """:func:`noise_gain` of plain (..., kernel_y, kernel_x) arrays, as ``noise_gain``."""
+    return {"noise_gain": np.sqrt(np.sum(kernel**2, axis=(-2, -1)))}
 
 
 @contract(Output("total_noise", "count", "total noise"))
@@ -235,69 +241,76 @@ def noise_terms(signal: xr.Dataset, sensor: xr.Dataset) -> xr.Dataset:
     breakdown (paper Figure 4). The scene term is that of the brighter of target and
     background, without the sensor's own irradiance, less the path term.
     """
-    s = sensor
-    time, tdi = signal["effective_integration_time"], s["tdi_stages"]
-    target, background = signal["target_photoelectrons"], signal["background_photoelectrons"]
-    chain = (target, background, s["max_well"], s["bit_depth"], s["read_noise"], s["other_noise"])
-    contrast = signal["contrast_photoelectrons"]
-    values = {
-        "snr": apply_kernel(_snr_kernel, s["frame_stacks"], contrast, *chain),
-        "snr_frame": apply_kernel(_snr_frame_kernel, contrast, *chain),
-        "shot_noise": apply_kernel(_shot_noise_of_brighter_kernel, target, background),
-        "scene_noise": apply_kernel(_scene_noise_kernel, signal["target_scene_rate"], time, tdi,
-                                    signal["background_scene_rate"], signal["path_rate"]),
-        "path_noise": apply_kernel(_rate_noise_kernel, signal["path_rate"], time, tdi),
-        "self_emission_noise": apply_kernel(_rate_noise_kernel, signal["sensor_rate"], time, tdi),
-        "dark_current_noise": apply_kernel(_dark_current_noise_kernel, tdi, s["dark_current"],
-                                           time),
-        "quantization_noise": apply_kernel(_quantization_noise_kernel, s["max_well"],
-                                           s["bit_depth"]),
-        "read_noise": s["read_noise"],
-        "other_noise": s["other_noise"],
-        "total_noise": apply_kernel(_chain_total_kernel, *chain),
-    }
-    return dataset({name: declared(values[name], output) for name, output in OUTPUTS.items()})
+    return dataset(apply_orchestrator(noise_arrays, OUTPUTS, *noise_inputs(sensor, signal)))
 
 
+_SENSOR_INPUTS = ("frame_stacks", "tdi_stages", "max_well", "bit_depth", "read_noise",
+                  "other_noise", "dark_current")
+_SIGNAL_INPUTS = ("effective_integration_time", "target_photoelectrons",
+                  "background_photoelectrons", "contrast_photoelectrons", "target_scene_rate",
+                  "background_scene_rate", "path_rate", "sensor_rate")
+
+
+def noise_inputs(sensor, signal) -> tuple:
+    """The arguments of :func:`noise_arrays`, in order.
+
+    From the sensor's parameters and the signal stage's outputs
+    (:data:`xbsm.radiometry.SIGNAL_OUTPUTS`), each a mapping by name.
+    """
+    return (*(sensor[name] for name in _SENSOR_INPUTS),
+            *(signal[name] for name in _SIGNAL_INPUTS))
+
+
+# each output keeps the dims of the arguments its rule reads, in the order it reads them
+_TOTAL = ("target_photoelectrons", "background_photoelectrons", "max_well", "bit_depth",
+          "read_noise", "other_noise")
+_EXPOSURE = ("effective_integration_time", "tdi_stages")
 OUTPUTS = outputs(
-    Output("snr", "1", "contrast signal-to-noise ratio after frame stacking"),
-    Output("snr_frame", "1", "single-frame contrast signal-to-noise ratio"),
-    Output("shot_noise", "count", "shot noise"),
-    Output("scene_noise", "count", "scene noise"),
-    Output("path_noise", "count", "path radiance noise"),
-    Output("self_emission_noise", "count", "self-emission and stray-light noise"),
-    Output("dark_current_noise", "count", "dark current noise"),
-    Output("quantization_noise", "count", "quantization noise", carries=("sensor",)),
-    Output("read_noise", "count", "read noise", carries=("sensor",)),
-    Output("other_noise", "count", "other noise", carries=("sensor",)),
-    Output("total_noise", "count", "total noise"),
+    Output("snr", "1", "contrast signal-to-noise ratio after frame stacking",
+           inputs=("frame_stacks", "contrast_photoelectrons", *_TOTAL)),
+    Output("snr_frame", "1", "single-frame contrast signal-to-noise ratio",
+           inputs=("contrast_photoelectrons", *_TOTAL)),
+    Output("shot_noise", "count", "shot noise", inputs=_TOTAL[:2]),
+    Output("scene_noise", "count", "scene noise",
+           inputs=("target_scene_rate", *_EXPOSURE, "background_scene_rate", "path_rate")),
+    Output("path_noise", "count", "path radiance noise", inputs=("path_rate", *_EXPOSURE)),
+    Output("self_emission_noise", "count", "self-emission and stray-light noise",
+           inputs=("sensor_rate", *_EXPOSURE)),
+    Output("dark_current_noise", "count", "dark current noise",
+           inputs=("tdi_stages", "dark_current", "effective_integration_time")),
+    Output("quantization_noise", "count", "quantization noise", carries=("sensor",),
+           inputs=("max_well", "bit_depth")),
+    Output("read_noise", "count", "read noise", carries=("sensor",), inputs=("read_noise",)),
+    Output("other_noise", "count", "other noise", carries=("sensor",), inputs=("other_noise",)),
+    Output("total_noise", "count", "total noise", inputs=_TOTAL),
 )
 """What :func:`noise_arrays` and :func:`noise_terms` return. [count: rms electrons]"""
 
 
-def noise_arrays(p, signal: dict) -> dict:
+def noise_arrays(frame_stacks, tdi_stages, max_well, bit_depth, read_noise, other_noise,
+                 dark_current, effective_integration_time, target_photoelectrons,
+                 background_photoelectrons, contrast_photoelectrons, target_scene_rate,
+                 background_scene_rate, path_rate, sensor_rate) -> dict:
     """The noise stage on plain arrays: every output of :data:`OUTPUTS`, by name.
 
-    ``p`` maps the sensor's parameters to arrays, ``signal`` the signal stage's outputs
-    (:data:`xbsm.radiometry.SIGNAL_OUTPUTS`) to arrays of one scenario.
+    The sensor's parameters and the signal stage's outputs, by their names (in the order
+    :func:`noise_inputs` gives them).
     """
-    time, tdi = signal["effective_integration_time"], p["tdi_stages"]
-    target, background = signal["target_photoelectrons"], signal["background_photoelectrons"]
-    chain = (target, background, p["max_well"], p["bit_depth"], p["read_noise"],
-             p["other_noise"])
-    contrast = signal["contrast_photoelectrons"]
+    time, tdi = effective_integration_time, tdi_stages
+    target, background = target_photoelectrons, background_photoelectrons
+    chain = (target, background, max_well, bit_depth, read_noise, other_noise)
     return {
-        "snr": _snr_kernel(p["frame_stacks"], contrast, *chain),
-        "snr_frame": _snr_frame_kernel(contrast, *chain),
+        "snr": _snr_kernel(frame_stacks, contrast_photoelectrons, *chain),
+        "snr_frame": _snr_frame_kernel(contrast_photoelectrons, *chain),
         "shot_noise": _shot_noise_of_brighter_kernel(target, background),
-        "scene_noise": _scene_noise_kernel(signal["target_scene_rate"], time, tdi,
-                                           signal["background_scene_rate"], signal["path_rate"]),
-        "path_noise": _rate_noise_kernel(signal["path_rate"], time, tdi),
-        "self_emission_noise": _rate_noise_kernel(signal["sensor_rate"], time, tdi),
-        "dark_current_noise": _dark_current_noise_kernel(tdi, p["dark_current"], time),
-        "quantization_noise": _quantization_noise_kernel(p["max_well"], p["bit_depth"]),
-        "read_noise": p["read_noise"],
-        "other_noise": p["other_noise"],
+        "scene_noise": _scene_noise_kernel(target_scene_rate, time, tdi, background_scene_rate,
+                                           path_rate),
+        "path_noise": _rate_noise_kernel(path_rate, time, tdi),
+        "self_emission_noise": _rate_noise_kernel(sensor_rate, time, tdi),
+        "dark_current_noise": _dark_current_noise_kernel(tdi, dark_current, time),
+        "quantization_noise": _quantization_noise_kernel(max_well, bit_depth),
+        "read_noise": read_noise,
+        "other_noise": other_noise,
         "total_noise": _chain_total_kernel(*chain),
     }
 

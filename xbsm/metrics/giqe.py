@@ -14,14 +14,15 @@ import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
+from typing import NamedTuple
 
 import numpy as np
 import xarray as xr
 
 from xbsm import flags as _flags
 
-from .._kernels import apply_kernel, dataset
-from .._metadata import Output, declared, named, outputs
+from .._kernels import apply_kernel, apply_orchestrator, dataset
+from .._metadata import Output, named, outputs
 from ..params import Instance, Pair, Spec, contract
 
 __all__ = [
@@ -419,7 +420,11 @@ def _label_flags(arrays, tests, versions=None, long_name="GIQE validity flags"):
     return out
 
 
-@contract(Output("q", "1", "sampling ratio Q = lambda N / p"))
+_Q_OUTPUTS = outputs(Output("q", "1", "sampling ratio Q = lambda N / p"))
+"""What :func:`sampling_q_arrays` returns."""
+
+
+@contract(_Q_OUTPUTS["q"])
 def sampling_q(wavelength, aperture_diameter, ifov):
     r"""Sampling ratio Q of an optics and detector: wavelength x f-number / pixel pitch.
 
@@ -443,7 +448,8 @@ def sampling_q(wavelength, aperture_diameter, ifov):
 
     NGA GIQE 5 report (2015), which assumes 1 <= Q <= 2.
     """
-    return apply_kernel(_sampling_q_kernel, _da(wavelength), _da(aperture_diameter), _da(ifov))
+    return apply_orchestrator(sampling_q_arrays, _Q_OUTPUTS, wavelength, aperture_diameter,
+                              ifov)["q"]
 
 
 @contract(calibration=_CALIBRATION)
@@ -726,37 +732,20 @@ def giqe_by_version(*, rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noi
         mean), ``gsd_gp`` (GIQE 4 ground plane), ``gsd_w`` (GIQE 5) [m];
         ``noise_gain`` [1].
     """
-    rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain = map(
-        _da, (rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain))
-    gsd = declared(apply_kernel(_geometric_mean_kernel, gsd_x, gsd_y), OUTPUTS["gsd"])
-    gsd_gp = declared(apply_kernel(_ground_plane_kernel, gsd, elevation, power=0.5),
-                      OUTPUTS["gsd_gp"])
-    gsd_w = declared(apply_kernel(_ground_plane_kernel, gsd_x, elevation, power=0.25),
-                     OUTPUTS["gsd_w"])
-    rer5 = declared(giqe5_rer(rer_x, rer_y), OUTPUTS["rer_giqe5"])
-    niirs = apply_kernel(_niirs_by_version_kernel, rer, gsd_x, gsd_y, eho, noise_gain, snr,
-                         elevation, rer_x, rer_y, outputs=[("giqe",)],
-                         sizes={"giqe": len(GIQE_VERSIONS)}, noise_coefficient=noise_coefficient)
-    niirs = declared(niirs.transpose("giqe", ...).assign_coords(giqe=_versions()),
-                     OUTPUTS["niirs"])
-    tested = (
-        {"snr": snr, "rer": rer, "gsd": gsd, "elevation": elevation, "niirs": niirs},
-        {"snr": snr, "rer": rer, "gsd": gsd_gp, "elevation": elevation, "niirs": niirs},
-        _giqe5_tested(calibration[5], snr=snr, rer=rer5, gsd=gsd_x, gsd_w=gsd_w,
-                      elevation=elevation, q=q, niirs=niirs),
-    )
-    # the dims each version's NIIRS depends on, in the order its equation broadcasts them
-    niirs_dims = ((rer, gsd, eho, noise_gain, snr), (rer, gsd_gp, eho, noise_gain, snr),
-                  (gsd_w, snr, rer5))
-    return dataset({
-        "niirs": niirs,
-        "flags": _flags_by_version(calibration, tested, niirs_dims),
-        "rer_giqe5": rer5,
-        "gsd": gsd,
-        "gsd_gp": gsd_gp,
-        "gsd_w": gsd_w,
-        "noise_gain": declared(noise_gain, OUTPUTS["noise_gain"]),
-    })
+    if q is not None and "orientation" not in getattr(q, "dims", ()):
+        q = _da(q).expand_dims(orientation=1, axis=-1)  # one orientation: tested as it is
+    args = (rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain, q)
+    out = apply_orchestrator(giqe_arrays, _ALL_OUTPUTS, *args,
+                             core=[[]] * (len(args) - 1) + [["orientation"]],
+                             sizes={"giqe": len(GIQE_VERSIONS)},
+                             noise_coefficient=noise_coefficient, calibration=calibration)
+    out["niirs"] = out["niirs"].transpose("giqe", ...).assign_coords(giqe=_versions())
+    flags = out["flags"]
+    dims = _flags_dims(calibration, dict(zip(_GIQE_INPUTS, args, strict=True)))
+    flags = flags.isel(dict.fromkeys(set(flags.dims) - set(dims), 0), drop=True)
+    out["flags"] = flags.transpose(*dims)
+    out["flags"].attrs = _flags.flag_attrs("GIQE validity flags")
+    return dataset(out)
 
 
 GIQE_VERSION_ATTRS = MappingProxyType({"long_name": "GIQE version"})
@@ -780,15 +769,31 @@ OUTPUTS = outputs(
 )
 """What :func:`giqe_by_version` and :func:`giqe_arrays` return besides ``flags``."""
 
+# each output keeps the dims of the arguments its rule reads, in the order it reads them
+_GIQE_INPUTS = ("rer", "eho", "rer_x", "rer_y", "gsd_x", "gsd_y", "snr", "elevation",
+                "noise_gain", "q")
+_NIIRS_INPUTS = ("rer", "gsd_x", "gsd_y", "eho", "noise_gain", "snr", "elevation", "rer_x",
+                 "rer_y")
+_ALL_OUTPUTS = outputs(
+    OUTPUTS["niirs"]._replace(inputs=_NIIRS_INPUTS),
+    # the flags' own dims are those of what each version tests (_flags_dims)
+    Output("flags", "1", "GIQE validity flags", ("giqe",), dtype=np.int32),
+    OUTPUTS["rer_giqe5"]._replace(inputs=("rer_x", "rer_y")),
+    OUTPUTS["gsd"]._replace(inputs=("gsd_x", "gsd_y")),
+    OUTPUTS["gsd_gp"]._replace(inputs=("gsd_x", "gsd_y", "elevation")),
+    OUTPUTS["gsd_w"]._replace(inputs=("gsd_x", "elevation")),
+    OUTPUTS["noise_gain"]._replace(inputs=("noise_gain",)),
+)
 
-def sampling_q_arrays(wavelength, aperture_diameter, ifov):
-    """:func:`sampling_q` on plain arrays."""
-    return _sampling_q_kernel(wavelength, aperture_diameter, ifov)
+
+def sampling_q_arrays(wavelength, aperture_diameter, ifov) -> dict:
+    """:func:`sampling_q` on plain arrays, as ``q``."""
+    return {"q": _sampling_q_kernel(wavelength, aperture_diameter, ifov)}
 
 
-def giqe_arrays(*, rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain, q,
+def giqe_arrays(rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain, q, *,
                 noise_coefficient, calibration) -> dict:
-    """:func:`giqe_by_version` on the plain arrays of one scenario (``q`` over orientation)."""
+    """:func:`giqe_by_version` on plain arrays (``q`` over orientation on its last axis)."""
     gsd = _geometric_mean_kernel(gsd_x, gsd_y)
     gsd_gp = _ground_plane_kernel(gsd, elevation, power=0.5)
     gsd_w = _ground_plane_kernel(gsd_x, elevation, power=0.25)
@@ -825,22 +830,43 @@ def _tests_by_version(calibration, tested, q_per_orientation=None):
     return arrays, tests, versions
 
 
-def _flags_by_version(calibration, tested, niirs_dims):
-    """The flags of every GIQE version along ``giqe`` from one kernel call.
+class _Dims(NamedTuple):
+    """What the flags' dims need of a tested quantity: its dims."""
 
-    ``tested[i]`` holds what version ``GIQE_VERSIONS[i]`` tests (its NIIRS being column i of
-    the ``niirs`` over ``giqe``); the result's dims are in the order in which the versions'
-    tests meet them, ``giqe`` first, as if each version were flagged alone and concatenated.
+    dims: tuple
+
+
+def _flags_dims(calibration, given) -> tuple:
+    """The dims of :func:`giqe_by_version`'s flags from those of its arguments ``given``.
+
+    Each version's flags carry the dims of what it tests, in the order in which its tests
+    meet them (its NIIRS: in the order its equation broadcasts them), ``giqe`` first, as
+    if each version were flagged alone and concatenated; then any other dim of a tested
+    quantity, in the order the tested quantities have them.
     """
-    arrays, tests, versions = _tests_by_version(calibration, tested)
-    order = []
+    def of(*names):
+        return _Dims(_dims_in_order(*(getattr(given[n], "dims", ()) for n in names)))
+
+    rer, snr, elevation, gsd = of("rer"), of("snr"), of("elevation"), of("gsd_x", "gsd_y")
+    gsd_gp, gsd_w = of("gsd_x", "gsd_y", "elevation"), of("gsd_x", "elevation")
+    niirs = _Dims(("giqe", *of(*_NIIRS_INPUTS).dims))
+    rer5, q = of("rer_x", "rer_y"), None if given["q"] is None else of("q")
+    gsd5_gp = gsd_w if calibration[5].gsd_ground_plane is not None else None
+    tested = (
+        {"snr": snr, "rer": rer, "gsd": gsd, "elevation": elevation, "niirs": niirs},
+        {"snr": snr, "rer": rer, "gsd": gsd_gp, "elevation": elevation, "niirs": niirs},
+        {"snr": snr, "rer": rer5, "gsd": gsd_w, "gsd_ground_plane": gsd5_gp,
+         "elevation": elevation, "q": q, "niirs": niirs})
+    niirs_dims = ((rer, gsd, of("eho"), of("noise_gain"), snr),
+                  (rer, gsd_gp, of("eho"), of("noise_gain"), snr), (gsd_w, snr, rer5))
+    arrays, tests, versions = _tests_by_version(calibration, tested, q_per_orientation=True)
+    order, every = [], []
     for i, array, test in zip(versions, arrays, tests, strict=True):
-        if test[6] is not None:  # this version's NIIRS
-            order += [a.dims for a in niirs_dims[i]]
-        else:  # q's any-orientation test drops orientation
-            core = "orientation" if test[2] == "any_outside" else None
-            order.append([d for d in array.dims if d != core])
-    flags = _label_flags(arrays, tests, versions=len(GIQE_VERSIONS))
-    dims = ("giqe", *_dims_in_order(*order))
-    dims = tuple(d for d in dims if d in flags.dims)
-    return flags if flags.dims == dims else flags.transpose(*dims, ...)
+        core = ("orientation" if test[2] == "any_outside"
+                else "giqe" if test[6] is not None else None)
+        own = [d for d in array.dims if d != core]
+        every.append(own)
+        order += [a.dims for a in niirs_dims[i]] if test[6] is not None else [own]
+    kept = _dims_in_order(*every)
+    return ("giqe", *(d for d in _dims_in_order(*order) if d in kept),
+            *(d for d in kept if d not in _dims_in_order(*order)))
