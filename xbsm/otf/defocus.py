@@ -18,7 +18,9 @@ def gaussian_defocus(fx, fy, blur_radius_x, blur_radius_y):
     fx, fy : xr.DataArray
         Angular spatial frequencies, broadcast against each other. [cycles/rad]
     blur_radius_x, blur_radius_y : float or xr.DataArray
-        1/e radius of the Gaussian blur spot along x and y, >= 0. [rad]
+        IBSM's "1/e blur spot radius" w along x and y, >= 0; the PSF of this OTF is
+        proportional to exp(-4 x^2 / w^2), so it falls to 1/e at w / 2 (w is the
+        spot's 1/e diameter). [rad]
 
     Returns
     -------
@@ -41,7 +43,7 @@ def gaussian_defocus(fx, fy, blur_radius_x, blur_radius_y):
 
 
 def object_domain_defocus_radius(aperture_diameter, object_range, focus_range):
-    r"""Angular 1/e defocus blur radius for an object away from the focus range.
+    r"""Angular defocus blur size w (IBSM's "1/e radius") for an object away from focus.
 
     Parameters
     ----------
@@ -55,7 +57,8 @@ def object_domain_defocus_radius(aperture_diameter, object_range, focus_range):
     Returns
     -------
     float or xr.DataArray
-        Blur radius, >= 0. [rad]
+        Blur size w as :func:`gaussian_defocus` takes it (the PSF's 1/e radius is w / 2),
+        >= 0. [rad]
 
     Notes
     -----
@@ -71,7 +74,7 @@ def object_domain_defocus_radius(aperture_diameter, object_range, focus_range):
 
 
 def image_domain_defocus_radius(aperture_diameter, focus_shift, focal_length):
-    r"""Angular 1/e defocus blur radius for a longitudinal focus shift at the detector.
+    r"""Angular defocus blur size w (IBSM's "1/e radius") for a focus shift at the detector.
 
     Parameters
     ----------
@@ -85,7 +88,8 @@ def image_domain_defocus_radius(aperture_diameter, focus_shift, focal_length):
     Returns
     -------
     float or xr.DataArray
-        Blur radius, >= 0. [rad]
+        Blur size w as :func:`gaussian_defocus` takes it (the PSF's 1/e radius is w / 2),
+        >= 0. [rad]
 
     Notes
     -----

@@ -56,7 +56,7 @@ class Optics:
     components: tuple
     """OTF components in the blur (``xbsm.simulate.options.COMPONENTS``)."""
     defocus_radius: tuple | None = None
-    """1/e radii (x, y) of the Gaussian defocus OTF. [rad]"""
+    """Blur sizes w (x, y) of the Gaussian defocus OTF (its PSF's 1/e radius is w / 2). [rad]"""
     pixel_angle: tuple | None = None
     """The camera's pixel angles (x, y), for a filter kernel in the blur. [rad]"""
 
