@@ -667,9 +667,9 @@ def band_cutoff_arrays(aperture_diameter, wavelength, qe, transmission, waveleng
 
 
 #: Below this RER the edge-response quadrature is not converged (tested on the worse of the
-#: x and y slices, where a one-axis smear shows first): over 240
-#: random systems (recipes/evidence/preset_error.py) accurate is within 6.2e-4 NIIRS where
-#: RER >= 0.05 (1e-5 where RER >= 0.15) and off by up to 3.6 below (flag ``blur_unresolved``).
+#: x and y slices, where a one-axis smear shows first): over 240 random systems
+#: (recipes/evidence/preset_error.py) accurate is within 6.2e-4 NIIRS where RER >= 0.05
+#: (1e-5 where RER >= 0.15) and off by up to 3.6 below (flag ``blur_unresolved``).
 UNRESOLVED_RER = 0.05
 
 
