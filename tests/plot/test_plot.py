@@ -129,6 +129,35 @@ def test_outside_calibration_is_drawn_dashed(result, drawn):
     assert any(np.isfinite(np.asarray(line.get_ydata(), dtype=float)).any() for line in dashed)
 
 
+def test_a_point_with_no_drawn_neighbour_is_marked_whatever_its_style(result, tmp_path):
+    # one visibility, two ground ranges: the 20 km point is on the scale but outside the
+    # GIQE 3 calibration (dashed style) and the 200 km point falls off the scale, so no
+    # segment joins it to anything; it must still be drawn (an open marker), not vanish
+    ds = result[["niirs", "flags"]].sel(giqe=[3], band=["red"], visibility=[5.0],
+                                        ground_range=[20000.0, 200000.0])
+    value = float(ds.niirs.sel(ground_range=20000.0).squeeze())
+    assert 0.0 < value < 10.0 and float(ds.niirs.sel(ground_range=200000.0).squeeze()) < 0
+    assert bool(flags.is_outside_calibration(ds.flags.sel(ground_range=20000.0)).all())
+    _, figures = _draw(ds, tmp_path)
+    fig = figures["figure2_niirs_giqe3.png"]
+    marked = [line for line in fig.axes[0].get_lines() if line.get_marker() == "o"
+              and np.isclose(np.asarray(line.get_ydata(), float), value).any()]
+    assert marked and marked[0].get_markerfacecolor() == "none"
+    # the legend's long labels are wrapped to fit the figure's width side by side
+    (legend,) = fig.legends
+    chars = max(len(line) for text in legend.get_texts() for line in text.get_text().split("\n"))
+    assert chars * legend._ncols <= fig.get_figwidth() * 11
+
+
+def test_legend_columns_fit_the_figure_width():
+    from xbsm.plot._layout import legend_columns
+
+    assert legend_columns(["a", "b", "c", "d"], 6.0) == (3, 16)  # 66 chars a line, 3 columns
+    # 43-character labels (+6 for the handle): two abreast in 99 characters, not three
+    assert legend_columns(["x" * 43, "y" * 43, "z" * 43], 9.0) == (2, 43)
+    assert legend_columns(["x" * 60], 2.0) == (1, 16)  # one column, wrapped, however narrow
+
+
 def test_invalid_cells_are_not_drawn(result, tmp_path):
     ds = result[["niirs", "flags"]].sel(giqe=[3]).copy(deep=True)
     cell = {"band": 0, "ground_range": 1, "visibility": 0}

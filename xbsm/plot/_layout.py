@@ -8,6 +8,8 @@ and 3 of the paper).
 
 from __future__ import annotations
 
+import textwrap
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -113,9 +115,12 @@ def _draw_series(ax, x, y, invalid, outside, color, bounds) -> set:
     solid, dashed = drawn & ~outside, drawn & near
     ax.plot(x, np.where(solid, y, np.nan), "-", color=color, lw=1.6)
     ax.plot(x, np.where(dashed, y, np.nan), "--", color=color, lw=1.2)
-    lonely = solid & ~np.concatenate([solid[1:], [False]]) & ~np.concatenate([[False],
-                                                                               solid[:-1]])
-    ax.plot(x[lonely], y[lonely], "o", color=color, ms=3)
+    # a point with no drawn neighbour of its style makes no line segment: mark it (filled
+    # inside the calibration, open outside it), else a two-point curve can draw nothing
+    for style, face in ((solid, color), (dashed, "none")):
+        lonely = style & ~np.concatenate([style[1:], [False]]) & ~np.concatenate(
+            [[False], style[:-1]])
+        ax.plot(x[lonely], y[lonely], "o", color=color, mfc=face, ms=4)
     used = {name for name, mask in (("inside", solid), ("outside", drawn & outside))
             if mask.any()}
     for name, mask, level, marker in (("below", below, lo, "v"), ("above", above, hi, "^"),
@@ -248,6 +253,26 @@ def _legend(fig, da, layout: _Layout, hues, colors, marks: list) -> None:
                for k, c in zip(hues, colors, strict=True) if k is not None]
     handles += marks
     if handles:
+        columns, width = legend_columns([h.get_label() for h in handles], fig.get_figwidth())
+        for handle in handles:
+            handle.set_label(textwrap.fill(handle.get_label(), width))
         fig.legend(handles=handles, loc="outside lower center", fontsize="small",
-                   ncols=min(3, len(handles)), frameon=False)
+                   ncols=columns, frameon=False)
 
+
+#: Characters of a "small" legend label per inch of figure width (about 9 pt type).
+_LEGEND_CHARS_PER_INCH = 11.0
+#: Room a legend entry needs besides its text (the handle and the gap between columns).
+_LEGEND_ENTRY_CHARS = 6
+
+
+def legend_columns(labels: list, width: float) -> tuple[int, int]:
+    """Legend columns (at most 3) and the characters a label may take per line in them.
+
+    The most columns whose longest label fits ``width`` inches side by side unwrapped;
+    one column, labels wrapped to the width, when even one does not fit.
+    """
+    line = int(width * _LEGEND_CHARS_PER_INCH)
+    entry = max(len(label) for label in labels) + _LEGEND_ENTRY_CHARS
+    columns = max(1, min(3, len(labels), line // entry))
+    return columns, max(line // columns - _LEGEND_ENTRY_CHARS, 1)
