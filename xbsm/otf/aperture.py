@@ -163,8 +163,8 @@ def _hopkins_terms(a_max: float) -> int:
     return int(np.ceil(n_max / 2.0))
 
 
-def _hopkins_kernel(s, waves):
-    """Hopkins (1955) defocused OTF; s = 2 rho/rho_c in [0, 2], waves = W20/lambda."""
+def hopkins_kernel(s, waves):
+    """Hopkins (1955) defocused OTF (numpy); s = 2 rho / rho_c in [0, 2], waves = W20 / lambda."""
     s, waves = np.broadcast_arrays(s, waves)
     sc = np.clip(s, 0.0, 2.0)
     a = 4.0 * np.pi * waves * sc
@@ -248,5 +248,5 @@ def defocused_aperture(fx, fy, wavelength, aperture_diameter, defocus_waves=None
     s = 2.0 * np.hypot(fx, fy) * wavelength / aperture_diameter
     if not isinstance(waves, xr.DataArray):
         waves = xr.DataArray(waves)
-    out = xr.apply_ufunc(_hopkins_kernel, s, waves, dask="parallelized", output_dtypes=[float])
+    out = xr.apply_ufunc(hopkins_kernel, s, waves, dask="parallelized", output_dtypes=[float])
     return described(out, defocused_aperture)
