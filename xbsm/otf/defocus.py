@@ -1,5 +1,7 @@
-"""Defocus: the defocused aperture OTF (Hopkins 1955, exact), its geometrical-optics
-disk, and IBSM's Gaussian approximation (IBSM 3-25 to 3-27).
+"""Defocus: the exact defocused aperture OTF, the geometric disk and IBSM's Gaussian.
+
+Hopkins (1955) for the clear pupil, the annular pupil's autocorrelation built from it,
+the geometrical-optics blur disk, and IBSM's Gaussian approximation (IBSM 3-25 to 3-27).
 
 One component, :func:`defocused_aperture_otf` (on plain arrays
 :func:`defocused_aperture_kernel`), gives the aperture's OTF with a defocus wavefront
@@ -17,13 +19,14 @@ from scipy.special import j1
 from .._kernels import apply_kernel
 from .._metadata import described
 from ..methods import KNOB_CHOICES
-from ..params import NONNEGATIVE, POSITIVE, Choice, Spec, Values, contract
+from ..params import Choice, Spec, Values, contract
 from .aperture import circular_aperture_kernel, hopkins_kernel
 from .spectral import _nonnegative, _positive
 
-__all__ = ["DEFOCUS_MODELS", "IBSM_GAUSSIAN_FRACTION", "blur_circle_diameter",
-           "defocused_aperture_kernel", "defocused_aperture_otf", "gaussian_defocus",
-           "geometric_defocus", "image_domain_defocus_radius", "object_domain_defocus_radius"]
+__all__ = ["DEFOCUS_MODELS", "IBSM_GAUSSIAN_FRACTION", "annular_defocus_kernel",
+           "blur_circle_diameter", "defocused_aperture_kernel", "defocused_aperture_otf",
+           "gaussian_defocus", "geometric_defocus", "image_domain_defocus_radius",
+           "object_domain_defocus_radius"]
 
 #: The defocus models of :func:`defocused_aperture_otf` (the method knob ``defocus_otf``).
 DEFOCUS_MODELS = tuple(c for c in KNOB_CHOICES["defocus_otf"] if c is not None)
@@ -32,8 +35,8 @@ IBSM_GAUSSIAN_FRACTION = 0.62
 """IBSM's Gaussian size w over the geometric blur-circle diameter d (IBSM Eqs. 3-26 and
 3-27: w = 0.62 D dz / f^2, and d = D dz / f^2 is the paraxial blur circle). [1]"""
 
-_OPD = Values(Spec("m", "defocus wavefront coefficient W020", **NONNEGATIVE))
-_DIAMETER = Values(Spec("m", "effective aperture diameter", **POSITIVE))
+_OPD = Values(Spec("m", "defocus wavefront coefficient W020", low=0.0))
+_DIAMETER = Values(Spec("m", "effective aperture diameter", low=0.0, low_open=True))
 
 
 @contract(defocus_opd=_OPD, aperture_diameter=_DIAMETER)
@@ -78,7 +81,7 @@ def _disk_kernel(x):
     return np.where(x == 0.0, 1.0, out)
 
 
-@contract(blur_diameter=Values(Spec("rad", "blur-circle angular diameter", **NONNEGATIVE)))
+@contract(blur_diameter=Values(Spec("rad", "blur-circle angular diameter", low=0.0)))
 def geometric_defocus(fx, fy, blur_diameter):
     r"""Geometrical-optics defocus OTF: the transform of a uniform blur disk.
 
@@ -131,23 +134,89 @@ def defocused_aperture_kernel(radial, aperture_diameter, wavelength, obscuration
         factor = _disk_kernel(np.pi * d * radial)
     elif model == "hopkins":
         s = 2.0 * radial * wavelength / aperture_diameter
-        exact = hopkins_kernel(s, opd / wavelength)
+        waves = opd / wavelength
+        exact = hopkins_kernel(s, waves)
         eta = np.asarray(obscuration_ratio, dtype=float)
-        if not np.any(eta > 0):
-            return np.where(opd == 0.0, in_focus, exact)
-        clear = circular_aperture_kernel(radial, aperture_diameter, wavelength, 0.0)
-        # an obscured pupil: Hopkins' factor over the clear pupil's OTF (an approximation,
-        # docs/otf.md); both are 0 at and beyond the cutoff
-        with np.errstate(divide="ignore", invalid="ignore"):
-            factor = np.where(clear > 0.0, exact / clear, 1.0)
-        return np.where(opd == 0.0, in_focus, np.where(eta > 0, in_focus * factor, exact))
+        if np.any(eta > 0):
+            exact = np.where(eta > 0, annular_defocus_kernel(s, waves, eta, clear=exact),
+                             exact)
+        return np.where(opd == 0.0, in_focus, exact)
     else:
         raise ValueError(f"model must be one of {', '.join(map(repr, DEFOCUS_MODELS))}; "
                          f"got {model!r}")
     return np.where(opd == 0.0, in_focus, in_focus * factor)
 
 
-@contract(wavelength=Values(Spec("m", "wavelength", **POSITIVE)),
+def annular_defocus_kernel(s, waves, obscuration_ratio, *, clear=None):
+    r"""Defocused OTF of an annular pupil on plain arrays (numpy; arguments broadcast).
+
+    ``s`` = 2 rho lambda / D in [0, 2], ``waves`` = W020 / lambda, ``obscuration_ratio``
+    eta in [0, 1). The pupil is the clear disk less the disk of radius eta; with the
+    defocus phase :math:`2\pi W_{020} r^2` the same function on both, its
+    autocorrelation is (Goodman's shear form; the sheared phases differ by
+    :math:`a x`, :math:`a = 4\pi W_{020} s`)
+
+    .. math::
+
+        H = \frac{H_H(s; W_{020}) - 2 C / \pi + \eta^2 H_H(s/\eta; \eta^2 W_{020})}
+                 {1 - \eta^2}
+
+    with :math:`H_H` Hopkins' clear-pupil OTF (:func:`xbsm.otf.aperture.hopkins_kernel`)
+    and :math:`C = \int \cos(a x)\,dA` over the overlap of the unit disk centred at
+    :math:`-s/2` and the disk of radius eta centred at :math:`+s/2`: the transform of
+    the small disk, :math:`\pi\eta^2 \cos(as/2)\,2J_1(a\eta)/(a\eta)`, where it lies
+    inside the large one (:math:`s \le 1 - \eta`), 0 where they are apart
+    (:math:`s \ge 1 + \eta`), and between, the lens split at the radical line
+    :math:`x^* = (1 - \eta^2)/(2s)` into two circular segments, each integrated in its
+    polar angle (:math:`x = c + R\cos\theta`: smooth integrands
+    :math:`2R^2\sin^2\theta\cos(a(c + R\cos\theta))`) by Gauss-Legendre with
+    at least :math:`a/2 + 40` nodes, converged to rounding (against an adaptive integral of the
+    pupil overlap's chords, ``tests/otf/test_defocus.py``). ``clear``: Hopkins' OTF at
+    (s, waves) if the caller has it.
+    """
+    s, waves, eta = np.broadcast_arrays(np.asarray(s, dtype=float),
+                                        np.asarray(waves, dtype=float),
+                                        np.asarray(obscuration_ratio, dtype=float))
+    s = np.clip(s, 0.0, 2.0)
+    a = 4.0 * np.pi * waves * s
+    with np.errstate(divide="ignore", invalid="ignore"):
+        small = hopkins_kernel(np.where(eta > 0, s / eta, 2.0), waves * eta**2)
+        inner = np.pi * eta**2 * np.cos(a * s / 2.0) * _disk_kernel(a * eta)
+        radical = (1.0 - eta**2) / (2.0 * s)
+    lens = (s > 1.0 - eta) & (s < 1.0 + eta)
+    cross = np.where(s <= 1.0 - eta, inner, 0.0)
+    if np.any(lens):
+        sl, al, el, xr_ = s[lens], a[lens], eta[lens], radical[lens]
+        # the small disk's segment left of the radical line: theta from theta1 to pi
+        theta1 = np.arccos(np.clip((xr_ - sl / 2.0) / el, -1.0, 1.0))
+        # the large disk's segment right of it: theta from 0 to theta2
+        theta2 = np.arccos(np.clip(xr_ + sl / 2.0, -1.0, 1.0))
+        # nodes: at least a / 2 + 40, a power of two per value (so that a value does not
+        # depend on the others in its array)
+        nodes = 2 ** np.ceil(np.log2(0.5 * np.abs(al) + 40.0)).astype(int)
+        part = np.empty(sl.shape)
+        for n in np.unique(nodes):
+            t, wt = np.polynomial.legendre.leggauss(int(n))
+            i = nodes == n
+            part[i] = (_segment(theta1[i], np.pi, el[i], sl[i] / 2.0, al[i], t, wt)
+                       + _segment(0.0, theta2[i], 1.0, -sl[i] / 2.0, al[i], t, wt))
+        cross[lens] = part
+    if clear is None:
+        clear = hopkins_kernel(s, waves)
+    return (clear - 2.0 * cross / np.pi + eta**2 * small) / (1.0 - eta**2)
+
+
+def _segment(lo, hi, radius, centre, a, t, wt):
+    """Integral of 2 R^2 sin^2(theta) cos(a (c + R cos theta)) over [lo, hi] (Gauss-Legendre)."""
+    lo, hi, radius, centre, a = (np.asarray(v, dtype=float)[..., None]
+                                 for v in (lo, hi, radius, centre, a))
+    half = (hi - lo) / 2.0
+    theta = lo + half * (t + 1.0)
+    f = 2.0 * radius**2 * np.sin(theta) ** 2 * np.cos(a * (centre + radius * np.cos(theta)))
+    return np.sum(half * f * wt, axis=-1)
+
+
+@contract(wavelength=Values(Spec("m", "wavelength", low=0.0, low_open=True)),
           aperture_diameter=_DIAMETER,
           defocus_opd=_OPD,
           obscuration_ratio=Values(Spec("1", "relative linear obscuration", 0.0, 1.0,
@@ -186,11 +255,11 @@ def defocused_aperture_otf(fx, fy, wavelength, aperture_diameter, defocus_opd,
 
     Notes
     -----
-    Hopkins' series is exact for a clear pupil. For an obscured pupil
-    (``obscuration_ratio`` > 0) "hopkins" multiplies the obscured aperture's OTF by the
-    ratio of the defocused to the in-focus clear-pupil OTF: an approximation whose
-    error docs/otf.md states (``recipes/evidence/defocus_models.py``). The Gaussian's
-    size against Hopkins is tabulated there too.
+    "hopkins" is exact for clear and obscured pupils: Hopkins' series for a clear pupil,
+    and for an obscured one the annular pupil's autocorrelation built from it
+    (:func:`annular_defocus_kernel`). "geometric" and "gaussian" are approximations
+    whose errors against Hopkins docs/otf.md tabulates
+    (``recipes/evidence/defocus_models.py``), with the Gaussian size that fits best.
     """
     out = apply_kernel(_defocused_xy_kernel, fx, fy, aperture_diameter, wavelength,
                        obscuration_ratio, defocus_opd, model=model)
