@@ -164,7 +164,7 @@ def section_gaussian():
     print()
 
 
-def median_time(func, repeat=7):
+def median_time(func, repeat=21):
     times = []
     for _ in range(repeat):
         t = time.perf_counter()
@@ -187,7 +187,7 @@ def section_chain():
                      .niirs.sel(giqe=4)) for m in ("hopkins", "geometric", "gaussian")]
         print(f"| {waves:g} | " + " | ".join(f"{v:.3f}" for v in row) + " |")
     print()
-    print(f"Cost of one niirs call (median of 7; load average {os.getloadavg()[0]:.2f}):\n")
+    print(f"Cost of one niirs call (median of 21; load average {os.getloadavg()[0]:.2f}):\n")
     print("| method | no defocus [ms] | W020 0.25 waves [ms] | 1 wave | 4 waves |")
     print("|---|---|---|---|---|")
     for m in ("accurate", "fast"):
