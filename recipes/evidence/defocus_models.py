@@ -16,8 +16,9 @@ wavelength), on the normalised frequency s = 2 rho lambda / D in [0, 2] (2001 po
    the Gaussian size w / d that fits Hopkins best in least squares, and the one that
    matches Hopkins' 50 % MTF frequency, with their errors.
 3. The chain: GIQE NIIRS of the Olson NIR camera (obscuration 0.4, 10 km) with
-   defocus, by model, and the cost of a ``niirs`` call with and without defocus
-   (median of repeated calls; the load average is printed).
+   defocus, by model; the edge rule's convergence with defocus; and the cost of a
+   ``niirs`` call with and without defocus (median of repeated calls; the load
+   average is printed).
 
 Run from the repository root::
 
@@ -35,6 +36,7 @@ from scipy.optimize import minimize_scalar
 from scipy.special import j1
 
 import xbsm
+import xbsm.flags
 from xbsm.examples import olson_scenario, olson_sensor
 from xbsm.otf.aperture import circular_aperture_kernel, hopkins_kernel
 from xbsm.otf.defocus import annular_defocus_kernel
@@ -186,6 +188,21 @@ def section_chain():
         row = [float(xbsm.niirs(s, sc, method=xbsm.method("accurate", defocus_otf=m))
                      .niirs.sel(giqe=4)) for m in ("hopkins", "geometric", "gaussian")]
         print(f"| {waves:g} | " + " | ".join(f"{v:.3f}" for v in row) + " |")
+    print()
+    fine = xbsm.method("accurate", min_panels=256, nodes_per_panel=20,
+                       panels_per_oscillation=4.0)
+    print("Edge-rule convergence with defocus (hopkins): GIQE 4 NIIRS of accurate and fast "
+          "minus that of a much finer rule (min_panels 256, 20 nodes per panel, 4 panels "
+          "per oscillation), the RER and whether blur_unresolved is set (accurate):\n")
+    print("| W020 [waves] | accurate - fine | fast - fine | RER | blur_unresolved |")
+    print("|---|---|---|---|---|")
+    for waves in (0.25, 1.0, 2.0, 4.0, 8.0):
+        s = olson_sensor("nir", defocus_opd=waves * lam)
+        acc, fast, ref = (xbsm.niirs(s, sc, method=m) for m in ("accurate", "fast", fine))
+        g4 = [float(r.niirs.sel(giqe=4)) for r in (acc, fast, ref)]
+        unresolved = bool(xbsm.flags.has_flag(acc.flags.sel(giqe=4), "blur_unresolved"))
+        print(f"| {waves:g} | {g4[0] - g4[2]:.1e} | {g4[1] - g4[2]:.1e} | "
+              f"{float(acc.rer):.3f} | {'yes' if unresolved else 'no'} |")
     print()
     print(f"Cost of one niirs call (median of 21; load average {os.getloadavg()[0]:.2f}):\n")
     print("| method | no defocus [ms] | W020 0.25 waves [ms] | 1 wave | 4 waves |")
