@@ -274,11 +274,13 @@ def defocused_aperture(fx, fy, wavelength, aperture_diameter, defocus_waves=None
           - \frac{4}{\pi a}\sin\frac{as}{2}\sum_{n\ge0} (-1)^n
               \frac{\sin(2n+1)\beta}{2n+1}\big(J_{2n}(a) - J_{2n+2}(a)\big)
 
-    Both sums run to Bessel order :math:`a_{max} + 6a_{max}^{1/3} + 30`
-    (:math:`a_{max}` the largest argument in each chunk), past which the
-    terms are below 1e-17: the series is converged to rounding (checked
-    against the pupil autocorrelation to 1e-13 up to 10 waves). At
-    :math:`a = 0` the in-focus limit :math:`(2\beta - \sin 2\beta)/\pi` is used.
+    Both sums run to Bessel order :math:`a + 6a^{1/3} + 30` (each value's own
+    :math:`a`), past which the terms are below 1e-17, with every :math:`J_n`
+    from one backward recurrence (:func:`hopkins_kernel`): the series is
+    converged to rounding (checked against the pupil autocorrelation to 1e-13
+    up to 10 waves). Below :math:`a = 10^{-7}` the in-focus limit
+    :math:`(2\beta - \sin 2\beta)/\pi` is used. Obscured pupils and the
+    chain's defocus: :func:`xbsm.otf.defocus.defocused_aperture_otf`.
     pyBSM 0.16.1 writes :math:`\sin(2n\beta(J - J))` for
     :math:`\sin(2n\beta)(J - J)`, uses :math:`2/(\pi a)` for
     :math:`4/(\pi a)` and stops after four terms (-27 % at

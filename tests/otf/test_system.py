@@ -1,4 +1,5 @@
-"""Defocus in the NIIRS chain and in image simulation: the sensor's defocus_opd (W020)."""
+"""The system OTF with defocus: the sensor's defocus_opd (W020) in the aperture component,
+both slices, filtered and unfiltered, through the NIIRS chain."""
 
 from __future__ import annotations
 
@@ -8,7 +9,6 @@ import xarray as xr
 
 import xbsm
 from xbsm.examples import olson_scenario, olson_sensor
-from xbsm.simulate import simulate_image
 
 SCENARIO = olson_scenario(ground_range=10e3, visibility=23.0)
 LAM = 0.7e-6  # W020 in waves at the NIR band's middle
@@ -93,28 +93,3 @@ def test_models_order_as_measured_and_agree_at_zero():
     n = {m: float(xbsm.niirs(s, SCENARIO, method=xbsm.method("accurate", defocus_otf=m))
                   .niirs.sel(giqe=4)) for m in ("hopkins", "geometric", "gaussian")}
     assert n["geometric"] < n["gaussian"] < n["hopkins"]
-
-
-def _camera(**extra):
-    return xbsm.sensor(aperture_diameter=0.2, focal_length=4.0, pixel_pitch_x=10e-6,
-                       wavelength_min=0.45e-6, wavelength_max=0.7e-6, integration_time=0.004,
-                       read_noise=20.0, max_well=60000.0, bit_depth=12.0, **extra)
-
-
-def test_image_simulation_blurs_with_the_sensor_defocus():
-    sc = xbsm.scenario(altitude=3000.0, ground_range=4000.0, visibility=23.0, cn2_at_1m=0.0)
-    img = np.zeros((65, 65))
-    img[32, 32] = 1.0
-    kw = dict(gsd=0.004, reflectance="identity", resampling="none", noise=False, seed=1)
-    base = simulate_image(img, _camera(), sc, **kw)
-    zero = simulate_image(img, _camera(defocus_opd=0.0), sc, **kw)
-    xr.testing.assert_identical(base, zero)
-    blurred = simulate_image(img, _camera(defocus_opd=1.0e-6), sc, **kw)
-
-    def spread(psf):
-        y, x = np.mgrid[0:psf.shape[0], 0:psf.shape[1]]
-        c = (psf.shape[0] - 1) / 2
-        return float((((y - c) ** 2 + (x - c) ** 2) * psf).sum() / psf.sum())
-
-    assert spread(blurred["psf"].values) > 1.5 * spread(base["psf"].values)
-    assert float(blurred["psf"].max()) < float(base["psf"].max())
