@@ -111,6 +111,7 @@ EXPECTED_UNITS = MappingProxyType({
     "aperture": "1", "turbulence": "1", "detector": "1", "jitter": "1", "drift": "1",
     "wavefront": "1", "filter": "1", "system": "1", "system_unfiltered": "1",
     "circular_aperture": "1", "defocused_aperture": "1", "gaussian_defocus": "1",
+    "defocused_aperture_otf": "1", "geometric_defocus": "1", "blur_circle_diameter": "rad",
     "aggregated_detector": "1", "charge_transfer": "1", "diffusion": "1", "gaussian": "1",
     "sharpening_filter": "1", "tdi": "1", "otf_to_psf": "1", "spectral_average": "1",
     "wind_blended_turbulence": "1", "polychromatic_turbulence": "1", "user_defined": "1",
@@ -169,6 +170,8 @@ NOT_LABELLED = MappingProxyType({
     **{f"xbsm.otf.{name}": "a kernel: plain numpy arrays in and out, composed by "
        "xbsm.otf.system (labelled by the mechanism's public function)"
        for name in ("aperture.circular_aperture_kernel", "detector.detector_kernel",
+                    "aperture.hopkins_kernel", "defocus.annular_defocus_kernel",
+                    "defocus.defocused_aperture_kernel",
                     "filters.dtft_filter_kernel", "filters.pybsm_filter_kernel",
                     "motion.drift_kernel", "motion.jitter_kernel",
                     "spectral.weighted_sum_kernel", "turbulence.band_kernel",
@@ -398,6 +401,11 @@ def _cases():
         "defocused_aperture": lambda: aperture.defocused_aperture(
             fx, fy, wl, 0.275, defocus_waves=0.5),
         "gaussian_defocus": lambda: defocus.gaussian_defocus(fx, fy, 1e-6, 2e-6),
+        "defocused_aperture_otf": lambda: defocus.defocused_aperture_otf(
+            fx, fy, wl, 0.275, xr.DataArray([0.0, 0.5e-6], dims="opd"), 0.4),
+        "geometric_defocus": lambda: defocus.geometric_defocus(fx, fy, 2e-6),
+        "blur_circle_diameter": lambda: defocus.blur_circle_diameter(
+            xr.DataArray([0.0, 0.5e-6], dims="opd"), 0.275),
         "object_domain_defocus_radius": lambda: defocus.object_domain_defocus_radius(
             0.275, xr.DataArray([1e3, 2e3], dims="range"), 1.5e3),
         "image_domain_defocus_radius": lambda: defocus.image_domain_defocus_radius(

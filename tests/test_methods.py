@@ -192,8 +192,8 @@ def test_accurate_is_within_1e3_niirs_of_a_16x_finer_reference(system):
 def _bad_values(knob):
     """Values no knob of that kind accepts (wrong choice, wrong type, out of range)."""
     from xbsm.methods import KNOB_INTEGERS, KNOB_REALS
-    if knob in KNOB_CHOICES:
-        return ["bogus", None, 1]
+    if knob in KNOB_CHOICES:  # None is a value where a knob allows "none" (defocus_otf)
+        return ["bogus", 1, *([] if None in KNOB_CHOICES[knob] else [None])]
     if knob in KNOB_INTEGERS:
         low, high = KNOB_INTEGERS[knob]
         return [low - 1, high + 1, 2.5, True, "3"]

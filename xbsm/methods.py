@@ -29,6 +29,7 @@ KNOB_CHOICES = MappingProxyType({
     "turbulence_path_rule": ("trapezoid", "gauss-legendre"),
     "elevation": ELEVATIONS,
     "geometry": FORMS,
+    "defocus_otf": ("hopkins", "geometric", "gaussian", None),
 })
 #: Allowed range [low, high] of every whole-number knob. The upper limits guard memory:
 #: each bounds an array the knob sizes (frequency nodes, path samples, wavelengths) well
@@ -126,6 +127,12 @@ class Method:
     uniform rule may exceed 0.01 (at 2 samples or more the worst measured error over
     Q = 0.02-2 and N = 101-1601 is 0.006; docs/speed_accuracy.md); at N = 101 that is
     Q = lambda F# / p < 0.12."""
+    defocus_otf: str | None
+    """How the sensor's ``defocus_opd`` (W020) enters the aperture OTF
+    (:func:`xbsm.otf.defocus.defocused_aperture_otf`): "hopkins" (Hopkins 1955, the exact
+    defocused clear-pupil OTF), "geometric" (the blur disk 2 J1(pi d f) / (pi d f)) or
+    "gaussian" (IBSM's approximation, w = 0.62 d); or None (pyBSM: its chain has no
+    defocus term, so a non-zero ``defocus_opd`` is refused rather than ignored)."""
 
     def __post_init__(self):
         if not (isinstance(self.name, str) and self.name):
@@ -188,6 +195,7 @@ _PRESETS: dict[str, Method] = {
         elevation="look-down",
         geometry="law-of-cosines",
         undersampling_threshold=2.0,
+        defocus_otf=None,
     ),
     "accurate": Method(
         name="accurate",
@@ -214,6 +222,7 @@ _PRESETS: dict[str, Method] = {
         elevation="target",
         geometry="stable",
         undersampling_threshold=2.0,
+        defocus_otf="hopkins",
     ),
 }
 _PRESETS["fast"] = _PRESETS["accurate"].replace(

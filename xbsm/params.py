@@ -364,6 +364,10 @@ SENSOR_SPECS: dict[str, Spec] = {
     "wavefront_correlation_length_y": Spec(
         "m", "correlation length of the pupil phase along y", **POSITIVE
     ),
+    "defocus_opd": Spec(
+        "m", "defocus wavefront coefficient W020 (path difference at the pupil edge)",
+        **NONNEGATIVE
+    ),
     "optics_transmission": Spec("1", "optics transmission (obscuration excluded)", **FRACTION),
     "quantum_efficiency": Spec("1", "detector quantum efficiency", **FRACTION),
     "stray_irradiance": Spec(
@@ -650,6 +654,7 @@ def sensor(
     wavefront_wavelength=0.633e-6,
     wavefront_correlation_length_x=None,
     wavefront_correlation_length_y=None,
+    defocus_opd=0.0,
     filter_kernel=None,
 ) -> xr.Dataset:
     """Camera parameters as a validated dataset.
@@ -708,6 +713,17 @@ def sensor(
         [m]
     wavefront_correlation_length_x, wavefront_correlation_length_y : float, optional
         Correlation lengths of the pupil phase; default the aperture diameter. [m]
+    defocus_opd : float or xr.DataArray
+        Defocus as the wavefront coefficient W020: the optical path difference at the
+        pupil edge between the wavefront and the sphere centred on the detector, >= 0;
+        0 (default) is in focus. A length, not waves, because a focus error is one
+        path difference at every wavelength of the band (W020 / lambda waves at each);
+        the OTF depends only on its magnitude. It gives the geometric blur circle's
+        angular diameter d = 8 W020 / D (:func:`xbsm.otf.defocus.blur_circle_diameter`),
+        and a focus shift dz gives W020 = dz D^2 / (8 f^2) paraxially
+        (:func:`xbsm.otf.aperture.defocus_wavefront_coefficient` for pyBSM's form).
+        It enters the aperture OTF by the method knob ``defocus_otf`` (Hopkins 1955 by
+        default; docs/otf.md). [m]
     filter_kernel : array_like or xr.DataArray, optional
         2-D post-processing (sharpening) kernel, rows along y, columns along x;
         dims ``kernel_y``, ``kernel_x``. Default: no filter ([[1]]).

@@ -863,3 +863,29 @@ def test_image_small_counts_only_the_chosen_components():
                           + sensor.detector_width_x / sensor.focal_length) * slant / GSD)
     assert 2 * full_blur_px + 1 > 24  # 4 lambda / D and the detector alone: about 21 px
     assert bool(xbsm.flags.has_flag(system["flags"], "image_small").all())
+
+
+# ---- defocus: the sensor's defocus_opd enters the aperture component ---------------
+
+def _defocus_camera(**extra):
+    return xbsm.sensor(**CAMERA, **extra)
+
+
+def test_image_simulation_blurs_with_the_sensor_defocus():
+    # d = 8 W020 / D = 40 urad at 1 um: 16 camera pixels of 2.5 urad
+    sc = SCENARIO
+    img = np.zeros((65, 65))
+    img[32, 32] = 1.0
+    kw = dict(gsd=0.004, reflectance="identity", resampling="none", noise=False, seed=1)
+    base = simulate_image(img, _defocus_camera(), sc, **kw)
+    zero = simulate_image(img, _defocus_camera(defocus_opd=0.0), sc, **kw)
+    xr.testing.assert_identical(base, zero)
+    blurred = simulate_image(img, _defocus_camera(defocus_opd=1.0e-6), sc, **kw)
+
+    def spread(psf):
+        y, x = np.mgrid[0:psf.shape[0], 0:psf.shape[1]]
+        c = (psf.shape[0] - 1) / 2
+        return float((((y - c) ** 2 + (x - c) ** 2) * psf).sum() / psf.sum())
+
+    assert spread(blurred["psf"].values) > 1.5 * spread(base["psf"].values)
+    assert float(blurred["psf"].max()) < float(base["psf"].max())

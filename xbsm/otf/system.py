@@ -20,7 +20,7 @@ import xarray as xr
 from .._kernels import apply_kernel, dataset
 from .._metadata import named
 from ..methods import Method
-from . import aperture, filters, motion, turbulence, wavefront
+from . import aperture, defocus, filters, motion, turbulence, wavefront
 from .detector import detector_kernel
 from .motion import jitter_kernel
 from .spectral import _spectral
@@ -132,7 +132,8 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
     parts = {
         # sensor quantities, weighted per scenario where they depend on wavelength
         "aperture": _spectral(_aperture_band_kernel, radial, s["aperture_diameter"],
-                              s["obscuration_ratio"], wl, w, blocked=True),
+                              s["obscuration_ratio"], s["defocus_opd"], wl, w, blocked=True,
+                              defocus_otf=_defocus_otf(s["defocus_opd"], method)),
         "turbulence": None,
         "detector": apply_kernel(detector_kernel, s["detector_width_x"], s["focal_length"], fx,
                               s["detector_width_y"], fy_),
@@ -186,12 +187,33 @@ def _last(a):
     return np.asarray(a)[..., None]
 
 
-def _aperture_band_kernel(radial, aperture_diameter, obscuration_ratio, wl, w):
-    """Aperture OTF weighted over the last (wavelength) axis by normalised ``w`` (numpy)."""
-    mono = aperture.circular_aperture_kernel(_last(np.hypot(radial, 0.0)),
-                                              _last(aperture_diameter), wl,
-                                              _last(obscuration_ratio))
+def _aperture_band_kernel(radial, aperture_diameter, obscuration_ratio, defocus_opd, wl, w, *,
+                          defocus_otf):
+    """Aperture OTF weighted over the last (wavelength) axis by normalised ``w`` (numpy).
+
+    With defocus (W020 = ``defocus_opd`` > 0 anywhere) the aperture's OTF is the
+    defocused one of :func:`xbsm.otf.defocus.defocused_aperture_kernel` by the model
+    ``defocus_otf``; without, the in-focus OTF as it always was (to the bit).
+    """
+    if np.any(defocus_opd):
+        mono = defocus.defocused_aperture_kernel(
+            _last(np.hypot(radial, 0.0)), _last(aperture_diameter), wl,
+            _last(obscuration_ratio), _last(defocus_opd), defocus_otf)
+    else:
+        mono = aperture.circular_aperture_kernel(_last(np.hypot(radial, 0.0)),
+                                                  _last(aperture_diameter), wl,
+                                                  _last(obscuration_ratio))
     return np.einsum("...k,...k->...", mono, w)
+
+
+def _defocus_otf(defocus_opd, method: Method):
+    """The method's defocus model; a non-zero W020 without one is refused."""
+    if method.defocus_otf is None and bool(np.any(np.asarray(defocus_opd) != 0)):
+        raise ValueError(
+            f"method {method.name!r} has no defocus model (defocus_otf=None: pyBSM's chain "
+            "has no defocus term) but the sensor's defocus_opd is non-zero; use "
+            "method='accurate' or xbsm.method('pybsm', defocus_otf='hopkins')")
+    return method.defocus_otf
 
 
 def _wavefront_band_kernel(variance, variance_wavelength, fx, length_x, fy, length_y, wl, w):
@@ -333,7 +355,9 @@ def system_slice_arrays(p, nodes, wavelength, spectral_weights, integration_time
                                      method.turbulence_path_rule),
         form=method.geometry)
     radial = [
-        _aperture_band_kernel(nodes, p["aperture_diameter"], p["obscuration_ratio"], wl, w),
+        _aperture_band_kernel(nodes, p["aperture_diameter"], p["obscuration_ratio"],
+                              p["defocus_opd"], wl, w,
+                              defocus_otf=_defocus_otf(p["defocus_opd"], method)),
         _turbulence_band_kernel(cn2, nodes, r0_ref, integration_time, p["tdi_stages"],
                                 p["platform_speed"], p["aperture_diameter"], wl, w)]
     sliced = [

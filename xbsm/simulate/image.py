@@ -324,9 +324,11 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
     convolution, resampling, basis : str, optional
         Override the method's knobs (:class:`xbsm.simulate.ImageMethod`).
     defocus_radius : float or (float, float), optional
-        Blur sizes w of a Gaussian defocus OTF along x and y, as
-        :func:`xbsm.otf.defocus.gaussian_defocus` takes them (IBSM's "1/e radius"; the
-        PSF falls to 1/e at w / 2). [rad]
+        Blur sizes w of IBSM's Gaussian defocus OTF along x and y, as
+        :func:`xbsm.otf.defocus.gaussian_defocus` takes them (IBSM's "1/e radius" is
+        the PSF's 1/e diameter: it falls to 1/e at w / 2). The exact defocus is the
+        sensor's ``defocus_opd``, which enters the "aperture" component as in the
+        NIIRS chain. [rad]
     channel_dim : str, optional
         The colour dim, if not one of the usual names.
     outputs : str or sequence of str, optional

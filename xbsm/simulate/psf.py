@@ -92,7 +92,8 @@ def kernel_half_width(optics: Optics, angle, shape):
     -------
     int, xr.DataArray
         The largest half-width over the scenarios (at most the image size), which pads
-        the FFT grid: the sum of 4 lambda_max / D, the detector width, 4 rms jitter,
+        the FFT grid: the sum of 4 lambda_max / D plus the defocus blur circle, the
+        detector width, 4 rms jitter,
         the drift, 4 lambda_max / r0, 3 defocus radii and the filter kernel; and per
         scenario whether twice the same sum over the chosen components only exceeds
         the image (flag ``image_small``).
@@ -101,7 +102,9 @@ def kernel_half_width(optics: Optics, angle, shape):
     _, r0 = _slices(optics, xr.DataArray([0.0], dims="frequency"))
     exposure = optics.integration_time * s["tdi_stages"]
     widths = {  # the core of each component's blur
-        "aperture": lambda: 4 * s["wavelength_max"] / s["aperture_diameter"],
+        # plus the defocus blur circle d = 8 W020 / D (0 in focus: the same to the bit)
+        "aperture": lambda: (4 * s["wavelength_max"] / s["aperture_diameter"]
+                             + 8.0 * s["defocus_opd"] / s["aperture_diameter"]),
         "detector": lambda: (np.maximum(s["detector_width_x"], s["detector_width_y"])
                              / s["focal_length"]),
         "jitter": lambda: 4 * np.maximum(s["jitter_x"], s["jitter_y"]),

@@ -1,0 +1,95 @@
+"""The system OTF with defocus: the sensor's defocus_opd (W020) in the aperture component,
+both slices, filtered and unfiltered, through the NIIRS chain."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import xbsm
+from xbsm.examples import olson_scenario, olson_sensor
+
+SCENARIO = olson_scenario(ground_range=10e3, visibility=23.0)
+LAM = 0.7e-6  # W020 in waves at the NIR band's middle
+
+
+@pytest.mark.parametrize("method", ["accurate", "fast"])
+@pytest.mark.parametrize("obscuration", [0.0, 0.4])
+def test_niirs_falls_monotonically_with_defocus(method, obscuration):
+    waves = [0.0, 0.05, 0.1, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0]
+    opd = xr.DataArray([w * LAM for w in waves], dims="defocus")
+    s = olson_sensor("nir", obscuration_ratio=obscuration, defocus_opd=opd)
+    out = xbsm.niirs(s, SCENARIO, method=method)
+    for version in (3, 4, 5):
+        n = out.niirs.sel(giqe=version).values
+        assert np.all(np.diff(n) < 0), (version, n)
+    rer = out.rer.values
+    assert np.all(np.diff(rer) < 0)
+
+
+def test_zero_defocus_is_every_result_to_the_bit():
+    # the default, an explicit 0 and the 0 cell of a sweep with non-zero defocus beside it
+    base = xbsm.niirs(olson_sensor("nir"), SCENARIO)
+    zero = xbsm.niirs(olson_sensor("nir", defocus_opd=0.0), SCENARIO)
+    swept = xbsm.niirs(olson_sensor("nir", defocus_opd=xr.DataArray(
+        [0.0, 1e-6], dims="defocus")), SCENARIO).isel(defocus=0, drop=True)
+    xr.testing.assert_identical(base, zero)
+    for name in base.data_vars:
+        np.testing.assert_array_equal(swept[name].values, base[name].values, err_msg=name)
+
+
+def test_zero_defocus_leaves_the_system_otf_to_the_bit():
+    f = xr.DataArray(np.linspace(0, 2e5, 33), dims="frequency")
+    base = xbsm.system_otf(olson_sensor("nir"), SCENARIO, f)
+    zero = xbsm.system_otf(olson_sensor("nir", defocus_opd=0.0), SCENARIO, f)
+    xr.testing.assert_identical(base, zero)
+
+
+def test_defocus_enters_both_slices_filtered_and_unfiltered():
+    kernel = [[0.0, -0.1, 0.0], [-0.1, 1.4, -0.1], [0.0, -0.1, 0.0]]
+    f = xr.DataArray(np.linspace(0, 2e5, 33), dims="frequency")
+    base = xbsm.system_otf(olson_sensor("nir", filter_kernel=kernel), SCENARIO, f)
+    blurred = xbsm.system_otf(olson_sensor("nir", filter_kernel=kernel, defocus_opd=0.5 * LAM),
+                              SCENARIO, f)
+    ratio = blurred["aperture"] / base["aperture"]
+    for name in ("system", "system_unfiltered"):
+        for o in ("x", "y"):
+            got = (blurred[name] / base[name]).sel(orientation=o).isel(frequency=slice(1, 20))
+            np.testing.assert_allclose(got, ratio.isel(frequency=slice(1, 20)), rtol=1e-12)
+    assert float(ratio.isel(frequency=10)) < 0.95
+
+
+def test_single_scenario_and_sweep_agree_with_defocus():
+    # the direct applier (one eager scenario) against the labelled one (a sweep)
+    opd = [0.3 * LAM, 1.2 * LAM]
+    swept = xbsm.niirs(olson_sensor("nir", defocus_opd=xr.DataArray(opd, dims="defocus")),
+                       SCENARIO)
+    for i, value in enumerate(opd):
+        one = xbsm.niirs(olson_sensor("nir", defocus_opd=value), SCENARIO)
+        np.testing.assert_allclose(swept.niirs.isel(defocus=i).values, one.niirs.values,
+                                   rtol=1e-12)
+
+
+def test_pybsm_refuses_defocus_and_is_unchanged_without_it():
+    s = olson_sensor("nir", defocus_opd=0.2e-6)
+    with pytest.raises(ValueError, match="defocus_opd is non-zero"):
+        xbsm.niirs(s, SCENARIO, method="pybsm")
+    # the other pyBSM numerics with a defocus model chosen explicitly
+    out = xbsm.niirs(s, SCENARIO, method=xbsm.method("pybsm", defocus_otf="hopkins"))
+    base = xbsm.niirs(olson_sensor("nir"), SCENARIO, method="pybsm")
+    assert np.all(out.niirs.values < base.niirs.values)
+
+
+@pytest.mark.parametrize("value", [-1e-7, np.nan, np.inf])
+def test_bad_defocus_is_refused_naming_the_parameter(value):
+    with pytest.raises(ValueError, match=r"defocus_opd must .*\[0, inf\) m"):
+        olson_sensor("nir", defocus_opd=value)
+
+
+def test_models_order_as_measured_and_agree_at_zero():
+    # docs/otf.md: at 0.5 waves on the Olson camera geometric < gaussian < hopkins
+    s = olson_sensor("nir", defocus_opd=0.5 * LAM)
+    n = {m: float(xbsm.niirs(s, SCENARIO, method=xbsm.method("accurate", defocus_otf=m))
+                  .niirs.sel(giqe=4)) for m in ("hopkins", "geometric", "gaussian")}
+    assert n["geometric"] < n["gaussian"] < n["hopkins"]
