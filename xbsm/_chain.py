@@ -143,7 +143,7 @@ def _photoelectrons_chain(ap, m, reflectance, temperature, integration_time) -> 
                "background_temperature": sc["background_temperature"]}
     radiances = ap.radiances(atm, "scenario", m, scenario=targets)
     band = ap.sensor_band(atm, m)
-    signal = ap.signal(atm, band, radiances, m)
+    signal = ap.signal(atm, band, radiances, m, noise_rates=False)
     counts = ap.reflectance_counts(signal, integration_time)
     return {**{name: counts[name] for name in ("photoelectrons", "effective_integration_time",
                                               "spectral_weights")},
@@ -253,8 +253,9 @@ class Labelled:
     def sensor_band(self, atm, m):
         return radiometry.sensor_band_terms(self.sensor, atm["wavelength"], m.constants)
 
-    def signal(self, atm, band, radiances, m):
-        return radiometry.signal_terms(self.sensor, atm, *radiances, m.constants, band=band)
+    def signal(self, atm, band, radiances, m, noise_rates=True):
+        return radiometry.signal_terms(self.sensor, atm, *radiances, m.constants, band=band,
+                                       noise_rates=noise_rates)
 
     def cutoff(self, atm, band):
         s = self.sensor
@@ -357,11 +358,11 @@ class Direct:
             *radiometry.sensor_band_inputs(p, wavelength, curves),
             **radiometry.planck_knobs(m.constants))
 
-    def signal(self, atm, band, radiances, m):
+    def signal(self, atm, band, radiances, m, noise_rates=True):
         k = m.constants
         return radiometry.signal_arrays(
             *radiometry.signal_inputs(self.sensor, atm, band, radiances), h=k.planck,
-            c=k.speed_of_light)
+            c=k.speed_of_light, noise_rates=noise_rates)
 
     def cutoff(self, atm, band):
         p = self.sensor

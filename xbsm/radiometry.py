@@ -141,13 +141,18 @@ def _rate_kernel(wavelength, quantum_efficiency, width_x, width_y, irradiance, *
 
 
 def _scene_kernel(wavelength, quantum_efficiency, width_x, width_y, optics_transmission,
-                  radiance, focal_length, aperture_diameter, sensor_irradiance, *, h, c):
-    """Spectral and band photoelectron rate of a scene radiance; and without the sensor's own."""
+                  radiance, focal_length, aperture_diameter, sensor_irradiance, *, h, c,
+                  scene=True):
+    """Spectral and band photoelectron rate of a scene radiance; and without the sensor's own.
+
+    ``scene`` False: the last is None (not computed).
+    """
     irradiance = _detector_irradiance_kernel(optics_transmission, radiance, focal_length,
                                              aperture_diameter, sensor_irradiance)
     detector = (wavelength, quantum_efficiency, width_x, width_y)
     spectral = _photon_rate_kernel(*detector, irradiance, h=h, c=c)
-    scene = _rate_kernel(*detector, irradiance - sensor_irradiance, h=h, c=c)
+    scene = (_rate_kernel(*detector, irradiance - sensor_irradiance, h=h, c=c) if scene
+             else None)
     return spectral, _trapezoid_kernel(spectral, wavelength), scene
 
 
@@ -743,7 +748,8 @@ def detector_irradiance(radiance, band: xr.Dataset, sensor: xr.Dataset):
 
 
 def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
-                 background_radiance, constants=CODATA, *, band=None) -> xr.Dataset:
+                 background_radiance, constants=CODATA, *, band=None,
+                 noise_rates=True) -> xr.Dataset:
     """Photoelectrons of target and background in one integration, by name (Sec. 2.2).
 
     Parameters
@@ -758,6 +764,9 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
         Physical constants.
     band : xr.Dataset, optional
         :func:`sensor_band_terms` on the atmosphere's wavelengths, if the caller has it.
+    noise_rates : bool
+        Also the band rates only the noise terms need (:data:`NOISE_RATES`); image
+        simulation does without them.
 
     Returns
     -------
@@ -773,10 +782,13 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
     """
     if band is None:
         band = sensor_band_terms(sensor, atmosphere["wavelength"], constants)
+    declared = (SIGNAL_OUTPUTS if noise_rates else
+                {name: o for name, o in SIGNAL_OUTPUTS.items() if name not in NOISE_RATES})
     return dataset(apply_orchestrator(
-        signal_arrays, SIGNAL_OUTPUTS,
+        signal_arrays, declared,
         *signal_inputs(sensor, atmosphere, band, (target_radiance, background_radiance)),
-        core=_SIGNAL_CORE, h=constants.planck, c=constants.speed_of_light))
+        core=_SIGNAL_CORE, h=constants.planck, c=constants.speed_of_light,
+        noise_rates=bool(noise_rates)))
 
 
 # ---- the stage's array orchestrators (one eager scenario: xbsm._chain's direct applier;
@@ -914,6 +926,8 @@ SIGNAL_OUTPUTS = outputs(  # the first five in the order _counts_kernel returns 
 )
 """What :func:`signal_arrays` and :func:`signal_terms` return."""
 _COUNT_NAMES = tuple(SIGNAL_OUTPUTS)[:5]
+NOISE_RATES = ("path_rate", "target_scene_rate", "background_scene_rate", "sensor_rate")
+"""The band rates of :data:`SIGNAL_OUTPUTS` that only the noise terms read."""
 _SPECTRAL_INPUTS = frozenset((*_TARGET, *_BACKGROUND, "path_thermal", "solar_scatter"))
 
 
@@ -937,27 +951,30 @@ def signal_arrays(wavelength, quantum_efficiency, detector_width_x, detector_wid
                   optics_transmission, target_radiance, background_radiance, focal_length,
                   aperture_diameter, sensor_irradiance, dark_current, integration_time,
                   tdi_stages, max_well_fill, max_well, path_thermal, solar_scatter,
-                  *, h, c) -> dict:
+                  *, h, c, noise_rates=True) -> dict:
     """:data:`SIGNAL_OUTPUTS` on plain arrays, from :func:`sensor_band_arrays`' band terms.
 
     The spectral arguments (``wavelength`` and every argument of the scene, path and
     sensor rates) vary along their last axis (or are constant: length 1 or 0-d); the
-    others are band quantities.
+    others are band quantities. ``noise_rates`` False: without :data:`NOISE_RATES`.
     """
     hc = {"h": h, "c": c}
     detector = (wavelength, quantum_efficiency, detector_width_x, detector_width_y,
                 optics_transmission)
     lens = (focal_length, aperture_diameter)
     (weights, target_rate, target_scene), (_, background_rate, background_scene) = (
-        _scene_kernel(*detector, radiance, *lens, sensor_irradiance, **hc)
+        _scene_kernel(*detector, radiance, *lens, sensor_irradiance, scene=noise_rates, **hc)
         for radiance in (target_radiance, background_radiance))
     counts = _counts_kernel(target_rate, dark_current, integration_time, tdi_stages,
                             background_rate, max_well_fill, max_well)
-    return {**dict(zip(_COUNT_NAMES, counts, strict=True)), "spectral_weights": weights,
-            "target_rate": target_rate,
+    out = {**dict(zip(_COUNT_NAMES, counts, strict=True)), "spectral_weights": weights,
+           "target_rate": target_rate}
+    if noise_rates:
+        out.update({
             "path_rate": _path_rate_kernel(*detector, path_thermal, solar_scatter, *lens, **hc),
             "target_scene_rate": target_scene, "background_scene_rate": background_scene,
-            "sensor_rate": _rate_kernel(*detector[:4], sensor_irradiance, **hc)}
+            "sensor_rate": _rate_kernel(*detector[:4], sensor_irradiance, **hc)})
+    return out
 
 
 _SIGNAL_CORE = tuple(_BAND if name in _SPECTRAL_INPUTS else ()
