@@ -52,6 +52,11 @@ def _edge(clip=None):
 
 EDGE = _edge()
 
+# frequencies and wavelengths for the OTF mechanisms' rows [cycles/rad], [m]
+FX = xr.DataArray([0.0, 1e5], dims="fx")
+FY = xr.DataArray([0.0, 1e5], dims="fy")
+WAVELENGTHS = xr.DataArray([0.6e-6, 0.7e-6], dims="wavelength")
+
 
 ERROR_ROWS = [
     # (id, call, exception, fragment the message must contain)
@@ -239,6 +244,64 @@ ERROR_ROWS = [
     ("measure_strided_view", lambda: xbsm.measure.slanted_edge_mtf(xr.DataArray(
         EDGE, dims=("y", "x"), coords={"y": np.arange(64), "x": np.arange(64)})[::2]),
      ValueError, "image's 'y' coordinate steps by 2 pixels"),
+    # the OTF mechanisms' declared contracts (xbsm/otf/_contracts.py): the same message as
+    # every other public function, the argument's name, interval and units
+    ("otf_aperture_wavelength_zero", lambda: xbsm.otf.aperture.circular_aperture(
+        FX, FY, 0.0, 0.275), ValueError, "wavelength must lie in (0, inf) m; got 0.0"),
+    ("otf_aperture_obscuration_one", lambda: xbsm.otf.aperture.circular_aperture(
+        FX, FY, 0.6e-6, 0.275, obscuration_ratio=1.0), ValueError,
+     "obscuration_ratio must lie in [0, 1) 1; got 1.0"),
+    ("otf_defocused_aperture_waves_inf", lambda: xbsm.otf.aperture.defocused_aperture(
+        FX, FY, 0.6e-6, 0.275, defocus_waves=np.inf), ValueError,
+     "defocus_waves must lie in (-inf, inf) 1; got inf"),
+    ("otf_defocus_coefficient_focal_length_nan",
+     lambda: xbsm.otf.aperture.defocus_wavefront_coefficient(1e-5, 0.275, np.nan), ValueError,
+     "focal_length must lie in (0, inf) m; got nan"),
+    ("otf_detector_width_negative", lambda: xbsm.otf.detector.detector(FX, FY, -8e-6, 8e-6, 4.0),
+     ValueError, "detector_width_x must lie in (0, inf) m; got -8e-06"),
+    ("otf_aggregation_fractional", lambda: xbsm.otf.detector.aggregated_detector(
+        FX, FY, 8e-6, 8e-6, 8e-6, 8e-6, 4.0, aggregation=1.5), ValueError,
+     "aggregation must be a whole number in [1, inf); got 1.5"),
+    ("otf_transfer_efficiency_above_one", lambda: xbsm.otf.detector.charge_transfer(
+        FX, FY, 8e-6, 8e-6, 4.0, 100, 100, 1.5), ValueError,
+     "transfer_efficiency must lie in [0, 1] 1; got 1.5"),
+    ("otf_diffusion_depletion_negative", lambda: xbsm.otf.detector.diffusion(
+        FX, FY, 1e5, -1e-6, 1e-5, 4.0), ValueError,
+     "depletion_width must lie in [0, inf) m; got -1e-06"),
+    ("otf_gaussian_blur_negative", lambda: xbsm.otf.filters.gaussian(FX, FY, -1e-6, 0.0),
+     ValueError,
+     "blur_size_x must lie in [0, inf) rad; got -1e-06"),
+    ("otf_sharpening_ifov_zero", lambda: xbsm.otf.filters.sharpening_filter(
+        FX, FY, np.ones((1, 1)), 0.0), ValueError, "ifov_x must lie in (0, inf) rad; got 0.0"),
+    ("otf_jitter_negative", lambda: xbsm.otf.motion.jitter(FX, FY, -1e-6, 0.0), ValueError,
+     "jitter_rms_x must lie in [0, inf) rad; got -1e-06"),
+    ("otf_drift_inf", lambda: xbsm.otf.motion.drift(FX, FY, np.inf, 0.0), ValueError,
+     "drift_x must lie in (-inf, inf) rad s-1; got inf"),
+    ("otf_tdi_half_stage", lambda: xbsm.otf.motion.tdi(FX, 8e-6, 4.0, 2.5, 1.0), ValueError,
+     "stages must make stages * phases a whole number >= 1"),
+    ("otf_random_phase_variance_negative", lambda: xbsm.otf.wavefront.random_phase_wavefront(
+        FX, FY, 0.6e-6, -0.1, 0.1, 0.1), ValueError,
+     "phase_variance must lie in [0, inf) rad2; got -0.1"),
+    ("otf_shannon_error_too_large", lambda: xbsm.otf.wavefront.shannon_wavefront(
+        FX, FY, 0.6e-6, 0.275, 0.2), ValueError,
+     "rms_wavefront_error must lie in [0, 0.18] 1; got 0.2"),
+    ("otf_hufnagel_valley_cn2_negative", lambda: xbsm.otf.turbulence.hufnagel_valley(
+        1000.0, cn2_at_1m=-1e-14), ValueError,
+     "cn2_at_1m must lie in [0, inf) m-2/3; got -1e-14"),
+    ("otf_slant_path_samples_one", lambda: xbsm.otf.turbulence.slant_path_coherence_diameter(
+        2e4, 9000.0, path_samples=1), ValueError,
+     "path_samples must be a whole number in [2, inf); got 1"),
+    ("otf_turbulence_r0_zero", lambda: xbsm.otf.turbulence.turbulence(FX, FY, 0.6e-6, 0.275, 0.0),
+     ValueError, "coherence_diameter must lie in (0, inf) m; got 0.0"),
+    ("otf_wind_blended_speed_negative", lambda: xbsm.otf.turbulence.wind_blended_turbulence(
+        FX, FY, 0.6e-6, 0.275, 0.05, 0.01, -1.0), ValueError,
+     "wind_speed must lie in [0, inf) m s-1; got -1.0"),
+    ("otf_band_r0_weights_all_zero", lambda: xbsm.otf.turbulence.band_coherence_diameter(
+        0.05, WAVELENGTHS, xr.zeros_like(WAVELENGTHS)), ValueError,
+     "weights must not be all zero along 'wavelength'"),
+    ("otf_spectral_average_weights_negative", lambda: xbsm.otf.spectral.spectral_average(
+        xr.ones_like(WAVELENGTHS), -xr.ones_like(WAVELENGTHS)), ValueError,
+     "weights must lie in [0, inf) 1; got -1.0"),
 ]
 
 

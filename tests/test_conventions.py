@@ -73,7 +73,7 @@ EXPECTED_UNITS = MappingProxyType({
     "cold_filter_emission_noise": "count", "stray_light_noise": "count",
     "spectral_weights": "s-1 m-1",
     "path_rate": "s-1", "target_scene_rate": "s-1", "background_scene_rate": "s-1",
-    "sensor_rate": "s-1",
+    "sensor_rate": "s-1", "target_rate": "s-1",
     # edge terms and GIQE
     "rer": "1", "rer_x": "1", "rer_y": "1", "eho": "1", "eho_x": "1", "eho_y": "1",
     "rer_giqe5": "1", "noise_gain": "1", "edge_response": "1",
@@ -158,6 +158,11 @@ NOT_LABELLED = MappingProxyType({
        for name in ("slant_and_elevation_kernel", "ground_range_at_elevation_kernel")},
     "xbsm.radiometry.is_emissive_band": "returns a bool",
     "xbsm.noise.noise_inputs": "returns the arguments of noise_arrays, as given",
+    **{f"xbsm.radiometry.{name}_inputs": f"returns the arguments of {name}_arrays, as given"
+       for name in ("radiance", "sensor_band", "signal")},
+    "xbsm.radiometry.surfaces": "returns the (reflectance, temperature) pairs, as given",
+    "xbsm.radiometry.planck_knobs": "returns the kernels' constants as plain floats",
+    "xbsm.radiometry.curve_on_band": "resample_spectral on plain arrays (the direct applier)",
     "xbsm.radiometry.resample_spectral": "keeps the attributes of the sensor curve it resamples",
     "xbsm.quadrature.aperture_breakpoints": "returns a numpy array",
     "xbsm.quadrature.detector_breakpoints": "returns a numpy array",
@@ -184,6 +189,7 @@ NOT_LABELLED = MappingProxyType({
                     "quadrature.band_cutoff_arrays", "quadrature.edge_rule_arrays",
                     "quadrature.undersampled_arrays", "radiometry.radiance_arrays",
                     "radiometry.sensor_band_arrays", "radiometry.signal_arrays",
+                    "radiometry.reflectance_counts_arrays",
                     "metrics.edge.slice_terms_arrays", "metrics.giqe.giqe_arrays",
                     "metrics.giqe.sampling_q_arrays", "otf.system.system_slice_arrays")},
 })

@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from xbsm._kernels import apply_kernel, dataset
+from xbsm._kernels import apply_kernel, apply_orchestrator, dataset
+from xbsm._metadata import Output
 
 
 def _coord(name, values, units):
@@ -146,3 +147,38 @@ def test_dataset_leaves_disagreements_to_xarray():
     shifted = C.assign_coords(ground_range=[2.0, 3.0, 4.0])
     xr.testing.assert_identical(dataset({"a": C, "b": shifted}),
                                 xr.Dataset({"a": C, "b": shifted}))
+
+
+# ---- apply_orchestrator: a core dim that some arguments lack, spectral and band outputs ----
+
+
+def _band_orchestrator(scale, spectrum, wavelength):
+    """A spectral product and its band total (a plain numpy orchestrator)."""
+    spectral = scale * spectrum * wavelength
+    return {"spectral": spectral, "total": spectral.sum(axis=-1), "scale": scale * spectrum}
+
+
+_BAND_OUTPUTS = {
+    "spectral": Output("spectral", "1", "spectral", ("wavelength",),
+                       inputs=("scale", "spectrum", "wavelength")),
+    "total": Output("total", "1", "total", inputs=("scale", "spectrum", "wavelength")),
+    "scale": Output("scale", "1", "scale", ("wavelength",), inputs=("scale", "spectrum")),
+}
+
+
+@pytest.mark.parametrize("spectrum", [B, 1.5], ids=["curve", "number"])
+def test_orchestrator_core_dim_that_an_argument_lacks_is_a_length_one_axis(spectrum):
+    # reference: the same equations in xarray arithmetic; A has no wavelength and reaches the
+    # orchestrator with a length-1 axis; an output on wavelength that none of its inputs
+    # varies along (a spectrum given as one number) is labelled without it
+    band = ["wavelength"]
+    out = apply_orchestrator(_band_orchestrator, _BAND_OUTPUTS, A, spectrum, W,
+                             core=[band, band, band])
+    expected = A * spectrum * W
+    xr.testing.assert_allclose(out["spectral"], expected.transpose(*out["spectral"].dims))
+    assert out["spectral"].dims == ("ground_range", "visibility", "wavelength")
+    xr.testing.assert_allclose(out["total"], expected.sum("wavelength"))
+    assert "wavelength" not in out["total"].dims
+    scale = A * spectrum
+    assert out["scale"].dims == scale.dims
+    np.testing.assert_array_equal(out["scale"].values, scale.values)

@@ -240,3 +240,15 @@ def test_signal_terms_dask_is_lazy_and_equals_eager(no_compute):
         assert computed[name].dims == eager[name].dims, name
         np.testing.assert_allclose(computed[name].values, eager[name].values, rtol=1e-14,
                                    err_msg=name)
+
+
+def test_signal_terms_without_noise_rates_leave_the_rest_unchanged():
+    # image simulation's signal stage: the same counts, weights and target rate, bit for bit,
+    # without the rates only the noise terms read
+    s, sc, atm = _swept_case()
+    radiances = radiometry.aperture_radiances(atm, sc, "scenario", 3.5e-6)
+    full = radiometry.signal_terms(s, atm, *radiances)
+    short = radiometry.signal_terms(s, atm, *radiances, noise_rates=False)
+    assert set(full.data_vars) - set(short.data_vars) == set(radiometry.NOISE_RATES)
+    for name in short.data_vars:
+        xr.testing.assert_identical(short[name], full[name])

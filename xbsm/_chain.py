@@ -13,8 +13,9 @@ the x and y slices -> edge terms -> GIQE.
   an optimizer or a Monte Carlo loop pays for the arithmetic, not for a few hundred
   small DataArrays.
 - :class:`Labelled`, for everything else (sweeps, dask): each stage's labelled door,
-  one ``xr.apply_ufunc`` per kernel, so that each quantity keeps only the dims it
-  depends on (a sensor quantity keeps sensor dims) and dask stays lazy.
+  its array orchestrator through one ``xr.apply_ufunc`` (or a kernel's, for the few
+  stages that have none yet), so that each quantity keeps only the dims it depends on
+  (a sensor quantity keeps sensor dims) and dask stays lazy.
 
 Both appliers run the same stage kernels in the same order; ``tests/test_chain.py``
 checks that they agree on every pyBSM reference case.
@@ -29,6 +30,7 @@ import xarray as xr
 
 from . import flags as fl
 from . import geometry, noise, params, quadrature, radiometry
+from ._kernels import apply_orchestrator
 from ._metadata import Output, dataset_of, declared, outputs, result
 from .atmosphere import WAVELENGTH_ATTRS, band_atmosphere, band_atmosphere_arrays
 from .metrics import edge as edge_
@@ -128,28 +130,25 @@ def _edge_chain(ap, r, atm, cutoff, view, m) -> dict:
 
 
 def _photoelectrons_chain(ap, m, reflectance, temperature, integration_time) -> dict:
-    """Image simulation's radiometry: photoelectrons of Lambertian targets by reflectance."""
-    s, k = ap.sensor, m.constants
+    """Image simulation's radiometry: photoelectrons of Lambertian targets by reflectance.
+
+    The SNR chain's radiometry (band atmosphere, aperture radiances, the sensor's band
+    terms, the signal stage) with every reflectance as the target, then image
+    simulation's well rule: one scale for the whole reflectance axis.
+    """
     atm = ap.atmosphere(m)
+    sc = ap.scenario  # its background: the signal stage's other radiance, unused here
+    targets = {"target_reflectance": reflectance, "target_temperature": temperature,
+               "background_reflectance": sc["background_reflectance"],
+               "background_temperature": sc["background_temperature"]}
+    radiances = ap.radiances(atm, "scenario", m, scenario=targets)
     band = ap.sensor_band(atm, m)
-    radiance = radiometry.total_radiance(atm, reflectance, temperature, k)
-    spectral = radiometry.photon_detection_rate(
-        radiometry.detector_irradiance(radiance, band, s), band["quantum_efficiency"],
-        s["detector_width_x"], s["detector_width_y"], k)
-    rate = radiometry.band_integral(spectral) + s["dark_current"]
-    counts = rate * integration_time * s["tdi_stages"]
-    saturation = counts.max("reflectance") / s["max_well"]
-    scale = xr.where(saturation > 1.0, 1.0 / saturation, 1.0)
-    counts = np.minimum(counts * scale, s["max_well"])
-    brightest = spectral.isel(reflectance=-1, drop=True)
-    return {
-        "photoelectrons": counts.assign_attrs(units="count", long_name="photoelectrons per pixel"),
-        "effective_integration_time": (integration_time * scale).assign_attrs(
-            units="s", long_name="integration time after the well limit"),
-        "spectral_weights": (brightest / brightest.max("wavelength")).assign_attrs(
-            units="1", long_name="normalised spectral photoelectron rate"),
-        "flags": ap.flag(atm["flags"], "well_fill_limited", scale < 1.0),
-    }
+    signal = ap.signal(atm, band, radiances, m, noise_rates=False)
+    counts = ap.reflectance_counts(signal, integration_time)
+    return {**{name: counts[name] for name in ("photoelectrons", "effective_integration_time",
+                                              "spectral_weights")},
+            "flags": ap.flag(atm["flags"], "well_fill_limited",
+                             counts["well_fill_scale"] < 1.0)}
 
 
 # ---- the doors ---------------------------------------------------------------------
@@ -246,15 +245,17 @@ class Labelled:
                                s["wavelength_min"], s["wavelength_max"],
                                interpolation=m.atmosphere_interpolation, band_edges=m.band_edges)
 
-    def radiances(self, atm, targets, m):
-        return radiometry.aperture_radiances(atm, self.scenario, targets,
-                                             self.sensor["wavelength_min"], m.constants)
+    def radiances(self, atm, targets, m, scenario=None):
+        sc = self.scenario if scenario is None else scenario
+        return radiometry.aperture_radiances(atm, sc, targets, self.sensor["wavelength_min"],
+                                             m.constants)
 
     def sensor_band(self, atm, m):
         return radiometry.sensor_band_terms(self.sensor, atm["wavelength"], m.constants)
 
-    def signal(self, atm, band, radiances, m):
-        return radiometry.signal_terms(self.sensor, atm, *radiances, m.constants, band=band)
+    def signal(self, atm, band, radiances, m, noise_rates=True):
+        return radiometry.signal_terms(self.sensor, atm, *radiances, m.constants, band=band,
+                                       noise_rates=noise_rates)
 
     def cutoff(self, atm, band):
         s = self.sensor
@@ -264,6 +265,14 @@ class Labelled:
 
     def noise(self, signal):
         return noise.noise_terms(signal, self.sensor)
+
+    def reflectance_counts(self, signal, integration_time):
+        s = self.sensor
+        return apply_orchestrator(
+            radiometry.reflectance_counts_arrays, radiometry.REFLECTANCE_COUNT_OUTPUTS,
+            signal["target_rate"], signal["spectral_weights"], s["dark_current"],
+            integration_time, s["tdi_stages"], s["max_well"],
+            core=[["reflectance"], ["reflectance", "wavelength"], [], [], [], []])
 
     @staticmethod
     def flag(flags, name: str, condition):
@@ -333,15 +342,27 @@ class Direct:
                                      band_edges=m.band_edges)
         return self._labelled.atmosphere(m) if atm is None else atm  # the door raises
 
-    def radiances(self, atm, targets, m):
-        return radiometry.radiance_arrays(atm, targets, self.sensor["wavelength_min"],
-                                          self.scenario, m.constants)
+    def radiances(self, atm, targets, m, scenario=None):
+        p = self.sensor
+        surfaces = radiometry.surfaces(targets, p["wavelength_min"],
+                                       p if scenario is None else scenario)
+        out = radiometry.radiance_arrays(*radiometry.radiance_inputs(atm, surfaces),
+                                         **radiometry.planck_knobs(m.constants))
+        return out["target_radiance"], out["background_radiance"]
 
     def sensor_band(self, atm, m):
-        return radiometry.sensor_band_arrays(self.sensor, atm["wavelength"], m.constants)
+        p, wavelength = self.sensor, atm["wavelength"]
+        curves = {name: radiometry.curve_on_band(p, name, wavelength)
+                  for name in radiometry.SPECTRAL_CURVES}
+        return radiometry.sensor_band_arrays(
+            *radiometry.sensor_band_inputs(p, wavelength, curves),
+            **radiometry.planck_knobs(m.constants))
 
-    def signal(self, atm, band, radiances, m):
-        return radiometry.signal_arrays(self.sensor, atm, band, radiances, m.constants)
+    def signal(self, atm, band, radiances, m, noise_rates=True):
+        k = m.constants
+        return radiometry.signal_arrays(
+            *radiometry.signal_inputs(self.sensor, atm, band, radiances), h=k.planck,
+            c=k.speed_of_light, noise_rates=noise_rates)
 
     def cutoff(self, atm, band):
         p = self.sensor

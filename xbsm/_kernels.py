@@ -97,10 +97,12 @@ def apply_kernel(kernel, /, *args, core=None, outputs=((),), sizes=None, dtype=f
         dask_gufunc_kwargs={"allow_rechunk": True, "output_sizes": dict(sizes or {})})
 
 
-def _broadcast(array, loop: tuple, cores: int):
-    """``array`` as a view with the ``loop`` shape before its last ``cores`` axes."""
-    shape = np.shape(array)
-    return np.broadcast_to(array, loop + shape[len(shape) - cores:])
+def _broadcast(array, loop: tuple, dims: tuple, lengths: dict):
+    """``array`` as a view of shape ``loop`` + its core ``dims``' ``lengths`` (else its own)."""
+    shape = (1,) * len(dims) + np.shape(array)
+    own = shape[len(shape) - len(dims):]
+    return np.broadcast_to(array, loop + tuple(lengths.get(d, n) for d, n in zip(
+        dims, own, strict=True)))
 
 
 def _merged_coords(arrays, dropped):
@@ -139,6 +141,14 @@ def apply_orchestrator(orchestrator, declared, /, *args, core=None, sizes=None,
     arrays, the outputs that declare only eager ones are computed eagerly apart (the lazy
     arguments, on which they do not depend, replaced by NaN).
 
+    A core dimension declared for an argument that does not have it (a sensor quantity
+    that does not vary with ``wavelength``, in a stage that integrates over it) reaches
+    the orchestrator as a length-1 axis in its place, so that numpy broadcasting lines it
+    up with the arguments that do. An output declares its own core dims (``dims``): a
+    spectral output keeps ``wavelength``, a band total does not. An output on a core dim
+    of the arguments that none of its declared inputs has is constant along it and is
+    labelled without it (a quantum efficiency given as one number stays one number).
+
     Parameters
     ----------
     orchestrator : callable
@@ -149,7 +159,8 @@ def apply_orchestrator(orchestrator, declared, /, *args, core=None, sizes=None,
     *args : float or xr.DataArray or None
         Its array arguments (None passes through: an input the stage does without).
     core : sequence of sequence of str, optional
-        Core dimensions of each argument (default none).
+        Core dimensions of each argument, in the order the orchestrator sees them as its
+        last axes (default none); one the argument lacks is a length-1 axis.
     sizes : mapping of str to int, optional
         Lengths of output core dimensions that no argument has.
     dask : {"parallelized", "allowed"}
@@ -182,41 +193,54 @@ def apply_orchestrator(orchestrator, declared, /, *args, core=None, sizes=None,
                      for name, a in zip(names, args, strict=True)]
             results = _apply_outputs(orchestrator, group, given, core, sizes, dask, knobs)
             for o, out in zip(group, results, strict=True):
-                labelled[o.name] = _kept(out, o, args, names)
+                labelled[o.name] = _kept(out, o, args, names, core)
     return {name: labelled[name] for name in declared}
 
 
 def _apply_outputs(orchestrator, outputs, args, core, sizes, dask, knobs):
     """The ``outputs`` of ``orchestrator`` over ``args`` (one ``xr.apply_ufunc``), on every dim."""
     given = [i for i, a in enumerate(args) if a is not None]  # None stays out of dask's way
-    cores, count = [len(core[i]) for i in given], len(args)
+    # the declared core dims each argument has (the others become length-1 axes)
+    present = {i: [d for d in core[i] if d in args[i].dims] for i in given}
+    count = len(args)
 
     def run(*arrays):
-        every = [None] * count
+        every, loops, lengths = [None] * count, [], {}
         for i, array in zip(given, arrays, strict=True):
+            own = present[i]
+            loop = np.shape(array)[:np.ndim(array) - len(own)]
+            loops.append(loop)
+            lengths.update(zip(own, np.shape(array)[len(loop):], strict=True))
+            if len(own) < len(core[i]):  # a declared core dim it lacks: a length-1 axis
+                array = np.reshape(array, loop + tuple(
+                    lengths[d] if d in own else 1 for d in core[i]))
             every[i] = array
         with np.errstate(all="ignore"):  # IEEE results, as xarray arithmetic gives them
             out = orchestrator(*every, **knobs)
-        loop = np.broadcast_shapes(*(np.shape(a)[:np.ndim(a) - n]
-                                     for a, n in zip(arrays, cores, strict=True)))
-        arrays = tuple(_broadcast(out[o.name], loop, len(o.dims)) for o in outputs)
+        loop = np.broadcast_shapes(*loops)
+        arrays = tuple(_broadcast(out[o.name], loop, o.dims, lengths) for o in outputs)
         return arrays if len(arrays) > 1 else arrays[0]
 
     arrays = [args[i] for i in given]
     results = xr.apply_ufunc(
-        run, *arrays, input_core_dims=[core[i] for i in given],
+        run, *arrays, input_core_dims=[present[i] for i in given],
         output_core_dims=[list(o.dims) for o in outputs], join=join_for(arrays), dask=dask,
         output_dtypes=[o.dtype for o in outputs], keep_attrs="override",
         dask_gufunc_kwargs={"allow_rechunk": True, "output_sizes": dict(sizes or {})})
     return results if len(outputs) > 1 else (results,)
 
 
-def _kept(out, output, args, names):
-    """``out`` on the dims of the arguments ``output`` declares, with its CF attributes."""
+def _kept(out, output, args, names, core):
+    """``out`` on the dims of the arguments ``output`` declares, with its CF attributes.
+
+    Its core dims are kept, but for an argument's core dim that none of those arguments
+    has (the output is constant along it).
+    """
     if output.inputs is not None:
         keep = dict.fromkeys(d for name in output.inputs
                              for d in getattr(args[names.index(name)], "dims", ()))
-        keep.update(dict.fromkeys(output.dims))
+        cores = {d for c in core for d in c}
+        keep.update(dict.fromkeys(d for d in output.dims if d in keep or d not in cores))
         dropped = [d for d in out.dims if d not in keep]
         if dropped:
             out = out.isel(dict.fromkeys(dropped, 0), drop=True)

@@ -112,12 +112,16 @@ class Values:
     """A physical argument (a float, an array or an eager DataArray) inside ``spec``'s interval.
 
     NaN counts as outside; dask-backed values are not computed to be checked.
+    ``optional``: None is allowed (the argument is not given).
     """
 
     spec: Spec
+    optional: bool = False
 
     def check(self, name: str, value):
         """``value`` unchanged if every one of its values lies in the interval."""
+        if value is None and self.optional:
+            return value
         if getattr(getattr(value, "data", None), "chunks", None) is not None:
             return value
         values = np.asarray(value, dtype=float)

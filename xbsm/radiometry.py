@@ -10,6 +10,14 @@ xarray boundary that aligns, labels and carries dask. A kernel writes its
 operations in the order of the equation it implements, so a result keeps the
 rounding and the dimension order that xarray arithmetic on the same equation
 would give.
+
+The stage's three steps (aperture radiances, the sensor's band terms, the signal)
+each have one array orchestrator (:func:`radiance_arrays`, :func:`sensor_band_arrays`,
+:func:`signal_arrays`) with its outputs declared beside it; the labelled doors
+(:func:`aperture_radiances`, :func:`sensor_band_terms`, :func:`signal_terms`) run it
+through :func:`xbsm._kernels.apply_orchestrator` (``wavelength`` a core dimension, each
+output spectral or a band total as declared), and :mod:`xbsm._chain`'s direct applier
+runs it on one eager scenario's arrays: the rules are written once.
 """
 
 from __future__ import annotations
@@ -19,8 +27,8 @@ from types import MappingProxyType
 import numpy as np
 import xarray as xr
 
-from ._kernels import apply_kernel, dataset
-from ._metadata import Output, declared, named, outputs
+from ._kernels import apply_kernel, apply_orchestrator, dataset
+from ._metadata import Output, named, outputs
 from .constants import CODATA, Constants
 from .params import Choice, contract
 
@@ -133,13 +141,18 @@ def _rate_kernel(wavelength, quantum_efficiency, width_x, width_y, irradiance, *
 
 
 def _scene_kernel(wavelength, quantum_efficiency, width_x, width_y, optics_transmission,
-                  radiance, focal_length, aperture_diameter, sensor_irradiance, *, h, c):
-    """Spectral and band photoelectron rate of a scene radiance; and without the sensor's own."""
+                  radiance, focal_length, aperture_diameter, sensor_irradiance, *, h, c,
+                  scene=True):
+    """Spectral and band photoelectron rate of a scene radiance; and without the sensor's own.
+
+    ``scene`` False: the last is None (not computed).
+    """
     irradiance = _detector_irradiance_kernel(optics_transmission, radiance, focal_length,
                                              aperture_diameter, sensor_irradiance)
     detector = (wavelength, quantum_efficiency, width_x, width_y)
     spectral = _photon_rate_kernel(*detector, irradiance, h=h, c=c)
-    scene = _rate_kernel(*detector, irradiance - sensor_irradiance, h=h, c=c)
+    scene = (_rate_kernel(*detector, irradiance - sensor_irradiance, h=h, c=c) if scene
+             else None)
     return spectral, _trapezoid_kernel(spectral, wavelength), scene
 
 
@@ -158,11 +171,17 @@ def _well_fill_kernel(photoelectrons, max_well_fill, max_well):
         return np.where(photoelectrons > limit, limit / photoelectrons, 1.0)
 
 
+def _full_counts_kernel(rate, dark_current, integration_time, tdi_stages):
+    """Photoelectrons of one integration before any well limit (pyBSM's operation order)."""
+    return (rate + dark_current) * integration_time * tdi_stages
+
+
 def _counts_kernel(target_rate, dark_current, integration_time, tdi_stages, background_rate,
                    max_well_fill, max_well):
     """Counts of target and background after the well-fill limit (pyBSM's operation order)."""
-    full_target = (target_rate + dark_current) * integration_time * tdi_stages
-    full_background = (background_rate + dark_current) * integration_time * tdi_stages
+    full_target = _full_counts_kernel(target_rate, dark_current, integration_time, tdi_stages)
+    full_background = _full_counts_kernel(background_rate, dark_current, integration_time,
+                                          tdi_stages)
     scale = _well_fill_kernel(np.maximum(full_target, full_background), max_well_fill,
                               max_well)
     target, background = scale * full_target, scale * full_background
@@ -246,7 +265,7 @@ def _dimension_order(args):
     return tuple(order)
 
 
-def _planck_knobs(constants: Constants) -> dict:
+def planck_knobs(constants: Constants) -> dict:
     """The constants the kernels take, as plain floats."""
     return {"h": constants.planck, "c": constants.speed_of_light, "k": constants.boltzmann}
 
@@ -279,7 +298,7 @@ def blackbody_radiance(wavelength, temperature, constants: Constants = CODATA):
     IBSM Eq. 3-35. Written with :math:`e^{-x}` so that it underflows
     gracefully to 0 instead of overflowing when :math:`\lambda T` is small.
     """
-    return _apply(_blackbody_kernel, (wavelength, temperature), **_planck_knobs(constants))
+    return _apply(_blackbody_kernel, (wavelength, temperature), **planck_knobs(constants))
 
 
 @contract(Output("total_radiance", "W m-2 sr-1 m-1", "spectral radiance at the aperture"))
@@ -314,7 +333,7 @@ def total_radiance(atmosphere: xr.Dataset, reflectance, temperature, constants=C
     a = atmosphere
     out = _apply(_total_radiance_kernel, (
         a["path_thermal"], reflectance, a["wavelength"], temperature, a["transmission"],
-        a["solar_scatter"], a["ground_reflected"]), **_planck_knobs(constants))
+        a["solar_scatter"], a["ground_reflected"]), **planck_knobs(constants))
     return out
 
 
@@ -436,7 +455,7 @@ def cold_shield_self_emission(wavelength, cold_shield_temperature, aperture_diam
     .. math:: E = \left(\pi - \frac{\pi}{1 + 4F^2}\right) L_{bb}(T_{cs})
     """
     out = _apply(_cold_shield_kernel, (focal_length, aperture_diameter, wavelength,
-                                       cold_shield_temperature), **_planck_knobs(constants))
+                                       cold_shield_temperature), **planck_knobs(constants))
     return out
 
 
@@ -465,7 +484,7 @@ def cold_stop_self_emission(wavelength, cold_filter_temperature, cold_filter_emi
     """
     out = _apply(_cold_stop_kernel, (cold_filter_emissivity, wavelength, cold_filter_temperature,
                                      focal_length, aperture_diameter),
-                 **_planck_knobs(constants))
+                 **planck_knobs(constants))
     return out
 
 
@@ -495,7 +514,7 @@ def optics_self_emission(wavelength, optics_temperature, optics_emissivity,
     """
     out = _apply(_optics_emission_kernel, (cold_filter_transmission, optics_emissivity,
                                            wavelength, optics_temperature, focal_length,
-                                           aperture_diameter), **_planck_knobs(constants))
+                                           aperture_diameter), **planck_knobs(constants))
     return out
 
 
@@ -599,6 +618,14 @@ def well_fill_scale(photoelectrons, max_well, max_well_fill):
     return _apply(_well_fill_kernel, (photoelectrons, max_well_fill, max_well))
 
 
+def curve_on_band(p, name: str, wavelength):
+    """:func:`resample_spectral` on plain arrays (``p``: the sensor's parameters by name)."""
+    dim = f"{name}_wavelength"
+    if dim not in p:
+        return p[name]
+    return _interp_kernel(p[name], wavelength, source=p[dim])
+
+
 def resample_spectral(values, wavelength: xr.DataArray, name: str):
     """Put a sensor's spectral curve onto the model's wavelengths.
 
@@ -661,8 +688,11 @@ def aperture_radiances(atmosphere: xr.Dataset, scenario: xr.Dataset, targets: st
     target, background : xr.DataArray
         [W m-2 sr-1 m-1]
     """
-    return tuple(total_radiance(atmosphere, reflectance, temperature, constants)
-                 for reflectance, temperature in _surfaces(targets, wavelength_min, scenario))
+    out = apply_orchestrator(
+        radiance_arrays, RADIANCE_OUTPUTS,
+        *radiance_inputs(atmosphere, surfaces(targets, wavelength_min, scenario)),
+        core=(_BAND,) * 9, **planck_knobs(constants))
+    return out["target_radiance"], out["background_radiance"]
 
 
 def sensor_band_terms(sensor: xr.Dataset, wavelength: xr.DataArray,
@@ -683,23 +713,14 @@ def sensor_band_terms(sensor: xr.Dataset, wavelength: xr.DataArray,
     xr.Dataset
         ``optics_transmission`` (with the cold filter and the central obscuration) [1],
         ``quantum_efficiency`` [1] and ``sensor_irradiance`` (self-emission of the cold
-        shield, optics and cold stop, plus stray light) [W m-2 m-1] (paper Eq. 2).
+        shield, optics and cold stop, plus stray light) [W m-2 m-1] (paper Eq. 2). The
+        first two keep ``wavelength`` where the sensor's curves vary with it.
     """
-    s = sensor
-    curves = {name: resample_spectral(s[name], wavelength, name)  # once each, here
-              for name in ("optics_transmission", "quantum_efficiency", "stray_irradiance")}
-    optics = _apply(_optics_transmission_kernel, (
-        s["cold_filter_transmission"], s["obscuration_ratio"], curves["optics_transmission"]),
-        wavelength=wavelength)
-    sensor_irradiance = _apply(_sensor_irradiance_kernel, (
-        s["focal_length"], s["aperture_diameter"], wavelength, s["cold_shield_temperature"],
-        s["cold_filter_transmission"], s["optics_emissivity"], s["optics_temperature"],
-        s["cold_filter_emissivity"], s["cold_filter_temperature"], curves["stray_irradiance"]),
-        wavelength=wavelength, **_planck_knobs(constants))
-    values = {"optics_transmission": optics,
-              "quantum_efficiency": curves["quantum_efficiency"],
-              "sensor_irradiance": sensor_irradiance}
-    return dataset({name: declared(values[name], o) for name, o in BAND_OUTPUTS.items()})
+    curves = {name: resample_spectral(sensor[name], wavelength, name)  # once each, here
+              for name in SPECTRAL_CURVES}
+    return dataset(apply_orchestrator(
+        sensor_band_arrays, BAND_OUTPUTS, *sensor_band_inputs(sensor, wavelength, curves),
+        core=(_BAND,) * 13, **planck_knobs(constants)))
 
 
 @contract(Output("detector_irradiance", "W m-2 m-1", "focal-plane spectral irradiance"))
@@ -727,7 +748,8 @@ def detector_irradiance(radiance, band: xr.Dataset, sensor: xr.Dataset):
 
 
 def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
-                 background_radiance, constants=CODATA, *, band=None) -> xr.Dataset:
+                 background_radiance, constants=CODATA, *, band=None,
+                 noise_rates=True) -> xr.Dataset:
     """Photoelectrons of target and background in one integration, by name (Sec. 2.2).
 
     Parameters
@@ -742,6 +764,9 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
         Physical constants.
     band : xr.Dataset, optional
         :func:`sensor_band_terms` on the atmosphere's wavelengths, if the caller has it.
+    noise_rates : bool
+        Also the band rates only the noise terms need (:data:`NOISE_RATES`); image
+        simulation does without them.
 
     Returns
     -------
@@ -750,122 +775,243 @@ def signal_terms(sensor: xr.Dataset, atmosphere: xr.Dataset, target_radiance,
         ``contrast_photoelectrons`` [count]; ``effective_integration_time`` after the
         well-fill limit [s]; ``well_fill_scale`` [1]; ``spectral_weights``, the
         target's spectral photoelectron rate [s-1 m-1]; and the band photoelectron
-        rates the noise terms need: ``path_rate``, ``target_scene_rate``,
-        ``background_scene_rate`` (scene plus path, without the sensor's own
-        irradiance) and ``sensor_rate`` [s-1].
+        rates: ``target_rate`` (the target's, the sensor's own irradiance included,
+        without dark current) and those the noise terms need, ``path_rate``,
+        ``target_scene_rate``, ``background_scene_rate`` (scene plus path, without the
+        sensor's own irradiance) and ``sensor_rate`` [s-1].
     """
-    s, wavelength = sensor, atmosphere["wavelength"]
     if band is None:
-        band = sensor_band_terms(s, wavelength, constants)
-    detector = (wavelength, band["quantum_efficiency"], s["detector_width_x"],
-                s["detector_width_y"], band["optics_transmission"])
-    optics = (s["focal_length"], s["aperture_diameter"], band["sensor_irradiance"])
-    knobs = {"h": constants.planck, "c": constants.speed_of_light}
-    spectral, target_rate, target_scene = _apply(
-        _scene_kernel, (*detector, target_radiance, *optics), wavelength=wavelength,
-        spectral=(True, False, False), **knobs)
-    _, background_rate, background_scene = _apply(
-        _scene_kernel, (*detector, background_radiance, *optics), wavelength=wavelength,
-        spectral=(True, False, False), **knobs)
-    counts = _apply(_counts_kernel, (
-        target_rate, s["dark_current"], s["integration_time"], s["tdi_stages"],
-        background_rate, s["max_well_fill"], s["max_well"]), spectral=(False,) * 5)
-    path = _apply(_path_rate_kernel, (
-        *detector, atmosphere["path_thermal"], atmosphere["solar_scatter"], *optics[:2]),
-        wavelength=wavelength, spectral=(False,), **knobs)
-    own = _apply(_rate_kernel, (*detector[:4], band["sensor_irradiance"]),
-                 wavelength=wavelength, spectral=(False,), **knobs)
-    values = {**dict(zip(_COUNT_NAMES, counts, strict=True)), "spectral_weights": spectral,
-              "path_rate": path, "target_scene_rate": target_scene,
-              "background_scene_rate": background_scene, "sensor_rate": own}
-    return dataset({name: declared(values[name], o) for name, o in SIGNAL_OUTPUTS.items()})
+        band = sensor_band_terms(sensor, atmosphere["wavelength"], constants)
+    declared = (SIGNAL_OUTPUTS if noise_rates else
+                {name: o for name, o in SIGNAL_OUTPUTS.items() if name not in NOISE_RATES})
+    return dataset(apply_orchestrator(
+        signal_arrays, declared,
+        *signal_inputs(sensor, atmosphere, band, (target_radiance, background_radiance)),
+        core=_SIGNAL_CORE, h=constants.planck, c=constants.speed_of_light,
+        noise_rates=bool(noise_rates)))
 
 
+# ---- the stage's array orchestrators (one eager scenario: xbsm._chain's direct applier;
+# ---- sweeps and dask: the doors above, through apply_orchestrator) ----------------------
+
+_BAND = ("wavelength",)
+SPECTRAL_CURVES = ("optics_transmission", "quantum_efficiency", "stray_irradiance")
+"""The sensor's parameters that may be curves over wavelength (resampled onto the band)."""
+
+_TARGET_RADIANCE = ("path_thermal", "target_reflectance", "wavelength", "target_temperature",
+                    "transmission", "solar_scatter", "ground_reflected")
+RADIANCE_OUTPUTS = outputs(  # each on the dims of paper Eq. 1's operands, in their order
+    Output("target_radiance", "W m-2 sr-1 m-1", "spectral radiance at the aperture",
+           _BAND, inputs=_TARGET_RADIANCE),
+    Output("background_radiance", "W m-2 sr-1 m-1", "spectral radiance at the aperture",
+           _BAND, inputs=tuple(n.replace("target", "background") for n in _TARGET_RADIANCE)),
+)
+"""What :func:`radiance_arrays` and :func:`aperture_radiances` return."""
+
+
+def surfaces(targets: str, wavelength_min, scenario) -> tuple:
+    """Reflectance and temperature of target and background (``aperture_radiances``' rule).
+
+    The GIQE standard target and background (the emissive convention from
+    :data:`EMISSIVE_BAND_START`) or the scenario's own, as
+    ``((target reflectance, temperature), (background reflectance, temperature))``.
+    """
+    if targets == "giqe":
+        emissive = is_emissive_band(float(wavelength_min))
+        return tuple((0.0 if emissive else standard["reflectance"], standard["temperature"])
+                     for standard in (GIQE_TARGET, GIQE_BACKGROUND))
+    return tuple((scenario[f"{s}_reflectance"], scenario[f"{s}_temperature"])
+                 for s in ("target", "background"))
+
+
+def radiance_inputs(atm, pairs: tuple) -> tuple:
+    """The arguments of :func:`radiance_arrays`, in order.
+
+    From the band atmosphere (a mapping by name) and :func:`surfaces`' pairs.
+    """
+    (target_reflectance, target_temperature), (background_reflectance,
+                                                background_temperature) = pairs
+    return (atm["path_thermal"], atm["wavelength"], atm["transmission"],
+            atm["solar_scatter"], atm["ground_reflected"], target_reflectance,
+            target_temperature, background_reflectance, background_temperature)
+
+
+def radiance_arrays(path_thermal, wavelength, transmission, solar_scatter, ground_reflected,
+                    target_reflectance, target_temperature, background_reflectance,
+                    background_temperature, *, h, c, k) -> dict:
+    """:data:`RADIANCE_OUTPUTS` on plain arrays: paper Eq. 1 for target and background."""
+    atm = (wavelength, transmission, solar_scatter, ground_reflected)
+
+    def eq1(reflectance, temperature):
+        w, tau, scatter, reflected = atm
+        return _total_radiance_kernel(path_thermal, reflectance, w, temperature, tau, scatter,
+                                      reflected, h=h, c=c, k=k)
+
+    return {"target_radiance": eq1(target_reflectance, target_temperature),
+            "background_radiance": eq1(background_reflectance, background_temperature)}
+
+
+_OWN_IRRADIANCE = ("focal_length", "aperture_diameter", "wavelength", "cold_shield_temperature",
+                   "cold_filter_transmission", "optics_emissivity", "optics_temperature",
+                   "cold_filter_emissivity", "cold_filter_temperature", "stray_irradiance")
 BAND_OUTPUTS = outputs(
-    Output("optics_transmission", "1", "optics transmission on the band", ("wavelength",),
-           ("sensor",)),
-    Output("quantum_efficiency", "1", "quantum efficiency on the band", ("wavelength",),
-           ("sensor",)),
+    Output("optics_transmission", "1", "optics transmission on the band", _BAND,
+           ("sensor",), inputs=("cold_filter_transmission", "obscuration_ratio",
+                                "optics_transmission")),
+    Output("quantum_efficiency", "1", "quantum efficiency on the band", _BAND,
+           ("sensor",), inputs=("quantum_efficiency",)),
     Output("sensor_irradiance", "W m-2 m-1",
-           "self-emission and stray focal-plane spectral irradiance", ("wavelength",),
-           ("sensor",)),
+           "self-emission and stray focal-plane spectral irradiance", _BAND,
+           ("sensor",), inputs=_OWN_IRRADIANCE),
 )
 """What :func:`sensor_band_arrays` and :func:`sensor_band_terms` return."""
 
-SIGNAL_OUTPUTS = outputs(  # the first five in the order _counts_kernel returns them
-    Output("target_photoelectrons", "count", "target photoelectrons"),
-    Output("background_photoelectrons", "count", "background photoelectrons"),
-    Output("contrast_photoelectrons", "count", "contrast photoelectrons"),
-    Output("effective_integration_time", "s", "integration time after the well-fill limit"),
-    Output("well_fill_scale", "1", "well-fill integration time scale"),
-    Output("spectral_weights", "s-1 m-1", "target spectral photoelectron rate", ("wavelength",)),
-    Output("path_rate", "s-1", "path radiance photoelectron rate"),
-    Output("target_scene_rate", "s-1", "target scene and path photoelectron rate"),
-    Output("background_scene_rate", "s-1", "background scene and path photoelectron rate"),
-    Output("sensor_rate", "s-1", "self-emission and stray photoelectron rate",
-           carries=("sensor",)),
-)
-"""What :func:`signal_arrays` and :func:`signal_terms` return."""
-_COUNT_NAMES = tuple(SIGNAL_OUTPUTS)[:5]
+
+def sensor_band_inputs(sensor, wavelength, curves) -> tuple:
+    """The arguments of :func:`sensor_band_arrays`, in order.
+
+    From the sensor's parameters (a mapping by name), the band's wavelengths and the
+    sensor's :data:`SPECTRAL_CURVES` resampled onto them (by name).
+    """
+    s = sensor
+    return (s["cold_filter_transmission"], s["obscuration_ratio"],
+            curves["optics_transmission"], s["focal_length"], s["aperture_diameter"],
+            wavelength, s["cold_shield_temperature"], s["optics_emissivity"],
+            s["optics_temperature"], s["cold_filter_emissivity"], s["cold_filter_temperature"],
+            curves["stray_irradiance"], curves["quantum_efficiency"])
 
 
-# ---- the stage on plain arrays (one eager scenario; xbsm._chain's direct applier) ----
-
-def _surfaces(targets: str, wavelength_min, scenario) -> list:
-    """Reflectance and temperature of target and background (``aperture_radiances``' rule)."""
-    if targets == "giqe":
-        emissive = is_emissive_band(float(wavelength_min))
-        return [(0.0 if emissive else standard["reflectance"], standard["temperature"])
-                for standard in (GIQE_TARGET, GIQE_BACKGROUND)]
-    return [(scenario[f"{s}_reflectance"], scenario[f"{s}_temperature"])
-            for s in ("target", "background")]
-
-
-def radiance_arrays(atm, targets: str, wavelength_min, scenario, constants: Constants) -> list:
-    """:func:`aperture_radiances` on plain arrays: target, background (``atm``: the band's)."""
-    surfaces = _surfaces(targets, wavelength_min, scenario)
-    return [_total_radiance_kernel(
-        atm["path_thermal"], reflectance, atm["wavelength"], temperature, atm["transmission"],
-        atm["solar_scatter"], atm["ground_reflected"], **_planck_knobs(constants))
-        for reflectance, temperature in surfaces]
-
-
-def _on_band(p, name: str, wavelength):
-    """A sensor curve of ``p`` resampled onto the band (:func:`resample_spectral`'s rule)."""
-    dim = f"{name}_wavelength"
-    if dim not in p:
-        return p[name]
-    return _interp_kernel(p[name], wavelength, source=p[dim])
-
-
-def sensor_band_arrays(p, wavelength, constants: Constants) -> dict:
-    """:data:`BAND_OUTPUTS` on plain arrays (``p``: the sensor's parameters)."""
-    optics = _optics_transmission_kernel(
-        p["cold_filter_transmission"], p["obscuration_ratio"],
-        _on_band(p, "optics_transmission", wavelength))
+def sensor_band_arrays(cold_filter_transmission, obscuration_ratio, optics_transmission,
+                       focal_length, aperture_diameter, wavelength, cold_shield_temperature,
+                       optics_emissivity, optics_temperature, cold_filter_emissivity,
+                       cold_filter_temperature, stray_irradiance, quantum_efficiency,
+                       *, h, c, k) -> dict:
+    """:data:`BAND_OUTPUTS` on plain arrays (the curves already on the band)."""
+    optics = _optics_transmission_kernel(cold_filter_transmission, obscuration_ratio,
+                                         optics_transmission)
     own = _sensor_irradiance_kernel(
-        p["focal_length"], p["aperture_diameter"], wavelength, p["cold_shield_temperature"],
-        p["cold_filter_transmission"], p["optics_emissivity"], p["optics_temperature"],
-        p["cold_filter_emissivity"], p["cold_filter_temperature"],
-        _on_band(p, "stray_irradiance", wavelength), **_planck_knobs(constants))
-    return {"optics_transmission": optics,
-            "quantum_efficiency": _on_band(p, "quantum_efficiency", wavelength),
+        focal_length, aperture_diameter, wavelength, cold_shield_temperature,
+        cold_filter_transmission, optics_emissivity, optics_temperature,
+        cold_filter_emissivity, cold_filter_temperature, stray_irradiance, h=h, c=c, k=k)
+    return {"optics_transmission": optics, "quantum_efficiency": quantum_efficiency,
             "sensor_irradiance": own}
 
 
-def signal_arrays(p, atm, band: dict, radiances, constants: Constants) -> dict:
-    """:data:`SIGNAL_OUTPUTS` on plain arrays, from :func:`sensor_band_arrays`' band terms."""
-    hc = {"h": constants.planck, "c": constants.speed_of_light}
-    detector = (atm["wavelength"], band["quantum_efficiency"], p["detector_width_x"],
-                p["detector_width_y"], band["optics_transmission"])
-    lens = (p["focal_length"], p["aperture_diameter"])
+# each output on the dims of the arguments its rule reads, in the order it reads them
+_DETECTOR = ("wavelength", "quantum_efficiency", "detector_width_x", "detector_width_y",
+             "optics_transmission")
+_LENS = ("focal_length", "aperture_diameter")
+_TARGET = (*_DETECTOR, "target_radiance", *_LENS, "sensor_irradiance")
+_BACKGROUND = (*_DETECTOR, "background_radiance", *_LENS, "sensor_irradiance")
+_COUNTS = (*_TARGET, "dark_current", "integration_time", "tdi_stages", *_BACKGROUND,
+           "max_well_fill", "max_well")
+SIGNAL_OUTPUTS = outputs(  # the first five in the order _counts_kernel returns them
+    Output("target_photoelectrons", "count", "target photoelectrons", inputs=_COUNTS),
+    Output("background_photoelectrons", "count", "background photoelectrons", inputs=_COUNTS),
+    Output("contrast_photoelectrons", "count", "contrast photoelectrons", inputs=_COUNTS),
+    Output("effective_integration_time", "s", "integration time after the well-fill limit",
+           inputs=_COUNTS),
+    Output("well_fill_scale", "1", "well-fill integration time scale", inputs=_COUNTS),
+    Output("spectral_weights", "s-1 m-1", "target spectral photoelectron rate", _BAND,
+           inputs=_TARGET),
+    Output("target_rate", "s-1", "target photoelectron rate", inputs=_TARGET),
+    Output("path_rate", "s-1", "path radiance photoelectron rate",
+           inputs=(*_DETECTOR, "path_thermal", "solar_scatter", *_LENS)),
+    Output("target_scene_rate", "s-1", "target scene and path photoelectron rate",
+           inputs=_TARGET),
+    Output("background_scene_rate", "s-1", "background scene and path photoelectron rate",
+           inputs=_BACKGROUND),
+    Output("sensor_rate", "s-1", "self-emission and stray photoelectron rate",
+           carries=("sensor",), inputs=(*_DETECTOR[:4], "sensor_irradiance")),
+)
+"""What :func:`signal_arrays` and :func:`signal_terms` return."""
+_COUNT_NAMES = tuple(SIGNAL_OUTPUTS)[:5]
+NOISE_RATES = ("path_rate", "target_scene_rate", "background_scene_rate", "sensor_rate")
+"""The band rates of :data:`SIGNAL_OUTPUTS` that only the noise terms read."""
+_SPECTRAL_INPUTS = frozenset((*_TARGET, *_BACKGROUND, "path_thermal", "solar_scatter"))
+
+
+def signal_inputs(sensor, atm, band, radiances) -> tuple:
+    """The arguments of :func:`signal_arrays`, in order.
+
+    From the sensor's parameters, the band atmosphere and the band terms
+    (:data:`BAND_OUTPUTS`), each a mapping by name, and the (target, background)
+    aperture radiances.
+    """
+    s = sensor
+    target, background = radiances
+    return (atm["wavelength"], band["quantum_efficiency"], s["detector_width_x"],
+            s["detector_width_y"], band["optics_transmission"], target, background,
+            s["focal_length"], s["aperture_diameter"], band["sensor_irradiance"],
+            s["dark_current"], s["integration_time"], s["tdi_stages"], s["max_well_fill"],
+            s["max_well"], atm["path_thermal"], atm["solar_scatter"])
+
+
+def signal_arrays(wavelength, quantum_efficiency, detector_width_x, detector_width_y,
+                  optics_transmission, target_radiance, background_radiance, focal_length,
+                  aperture_diameter, sensor_irradiance, dark_current, integration_time,
+                  tdi_stages, max_well_fill, max_well, path_thermal, solar_scatter,
+                  *, h, c, noise_rates=True) -> dict:
+    """:data:`SIGNAL_OUTPUTS` on plain arrays, from :func:`sensor_band_arrays`' band terms.
+
+    The spectral arguments (``wavelength`` and every argument of the scene, path and
+    sensor rates) vary along their last axis (or are constant: length 1 or 0-d); the
+    others are band quantities. ``noise_rates`` False: without :data:`NOISE_RATES`.
+    """
+    hc = {"h": h, "c": c}
+    detector = (wavelength, quantum_efficiency, detector_width_x, detector_width_y,
+                optics_transmission)
+    lens = (focal_length, aperture_diameter)
     (weights, target_rate, target_scene), (_, background_rate, background_scene) = (
-        _scene_kernel(*detector, radiance, *lens, band["sensor_irradiance"], **hc)
-        for radiance in radiances)
-    counts = _counts_kernel(target_rate, p["dark_current"], p["integration_time"],
-                            p["tdi_stages"], background_rate, p["max_well_fill"], p["max_well"])
-    return {**dict(zip(_COUNT_NAMES, counts, strict=True)), "spectral_weights": weights,
-            "path_rate": _path_rate_kernel(*detector, atm["path_thermal"],
-                                           atm["solar_scatter"], *lens, **hc),
+        _scene_kernel(*detector, radiance, *lens, sensor_irradiance, scene=noise_rates, **hc)
+        for radiance in (target_radiance, background_radiance))
+    counts = _counts_kernel(target_rate, dark_current, integration_time, tdi_stages,
+                            background_rate, max_well_fill, max_well)
+    out = {**dict(zip(_COUNT_NAMES, counts, strict=True)), "spectral_weights": weights,
+           "target_rate": target_rate}
+    if noise_rates:
+        out.update({
+            "path_rate": _path_rate_kernel(*detector, path_thermal, solar_scatter, *lens, **hc),
             "target_scene_rate": target_scene, "background_scene_rate": background_scene,
-            "sensor_rate": _rate_kernel(*detector[:4], band["sensor_irradiance"], **hc)}
+            "sensor_rate": _rate_kernel(*detector[:4], sensor_irradiance, **hc)})
+    return out
+
+
+_SIGNAL_CORE = tuple(_BAND if name in _SPECTRAL_INPUTS else ()
+                     for name in signal_arrays.__code__.co_varnames[:17])
+
+
+_EXPOSURE = ("target_rate", "dark_current", "integration_time", "tdi_stages", "max_well")
+REFLECTANCE_COUNT_OUTPUTS = outputs(
+    Output("photoelectrons", "count", "photoelectrons per pixel", ("reflectance",),
+           inputs=_EXPOSURE),
+    Output("effective_integration_time", "s", "integration time after the well limit",
+           inputs=("integration_time", *_EXPOSURE)),
+    Output("spectral_weights", "1", "normalised spectral photoelectron rate", _BAND,
+           inputs=("spectral_weights",)),
+    Output("well_fill_scale", "1", "well-fill integration time scale", inputs=_EXPOSURE),
+)
+"""What :func:`reflectance_counts_arrays` returns."""
+
+
+def reflectance_counts_arrays(target_rate, spectral_weights, dark_current, integration_time,
+                              tdi_stages, max_well) -> dict:
+    """:data:`REFLECTANCE_COUNT_OUTPUTS` on plain arrays: image simulation's well rule.
+
+    The counts of Lambertian targets of many reflectances in one integration, scaled by
+    one factor so that the brightest fills the well at most, then capped at it (pyBSM's
+    ``reflectance_to_photoelectrons``); and the brightest target's spectral rate
+    normalised to a peak of 1. ``target_rate`` (the signal stage's) varies with
+    reflectance along its last axis, ``spectral_weights`` along its last two
+    (reflectance, wavelength); the others are band quantities.
+    """
+    dark, time, stages, well = (np.asarray(a)[..., np.newaxis] for a in (
+        dark_current, integration_time, tdi_stages, max_well))
+    counts = _full_counts_kernel(target_rate, dark, time, stages)
+    saturation = np.fmax.reduce(counts, axis=-1) / max_well  # NaN-skipping maximum
+    scale = np.where(saturation > 1.0, 1.0 / saturation, 1.0)
+    brightest = spectral_weights[..., -1, :]
+    return {"photoelectrons": np.minimum(counts * scale[..., np.newaxis], well),
+            "effective_integration_time": integration_time * scale,
+            "spectral_weights": brightest / np.fmax.reduce(brightest, axis=-1, keepdims=True),
+            "well_fill_scale": scale}

@@ -7,7 +7,8 @@ import xarray as xr
 
 from .._kernels import apply_kernel
 from .._metadata import described
-from .spectral import _finite, _positive, _require
+from ..params import Spec, Values, contract
+from ._contracts import APERTURE_DIAMETER, FOCAL_LENGTH, WAVELENGTH
 
 __all__ = ["circular_aperture", "defocused_aperture", "defocus_wavefront_coefficient"]
 
@@ -18,6 +19,8 @@ def _diffraction_term(r):
     return (2.0 / np.pi) * (np.arccos(rc) - rc * np.sqrt(1.0 - rc**2))
 
 
+@contract(wavelength=WAVELENGTH, aperture_diameter=APERTURE_DIAMETER,
+          obscuration_ratio=Values(Spec("1", "obscuration ratio", 0.0, 1.0, high_open=True)))
 def circular_aperture(fx, fy, wavelength, aperture_diameter, obscuration_ratio=0.0):
     r"""Diffraction OTF of a circular aperture with a centred circular obscuration.
 
@@ -62,9 +65,6 @@ def circular_aperture(fx, fy, wavelength, aperture_diameter, obscuration_ratio=0
 
     and 0 beyond. For :math:`\eta = 0` it reduces to :math:`A(\nu)`.
     """
-    _positive("wavelength", wavelength)
-    _positive("aperture_diameter", aperture_diameter)
-    _require("obscuration_ratio", obscuration_ratio, lambda a: (a >= 0) & (a < 1), "in [0, 1)")
     out = apply_kernel(_circular_aperture_xy_kernel, fx, fy, aperture_diameter, wavelength,
                     obscuration_ratio)
     return described(out, circular_aperture)
@@ -119,6 +119,7 @@ def _annulus_transition(nu, eta):
     )
 
 
+@contract(aperture_diameter=APERTURE_DIAMETER, focal_length=FOCAL_LENGTH)
 def defocus_wavefront_coefficient(focus_shift, aperture_diameter, focal_length):
     r"""Defocus wavefront coefficient W20 produced by a longitudinal focus shift.
 
@@ -143,8 +144,6 @@ def defocus_wavefront_coefficient(focus_shift, aperture_diameter, focal_length):
 
     .. math:: W_{20} = \frac{\delta z}{2\,(1 + 4F^2)} \approx \frac{\delta z}{8F^2}
     """
-    _positive("aperture_diameter", aperture_diameter)
-    _positive("focal_length", focal_length)
     f_number = focal_length / aperture_diameter
     out = focus_shift / (2.0 * (1.0 + 4.0 * f_number**2))
     return described(out, defocus_wavefront_coefficient, units="m")
@@ -233,6 +232,9 @@ def hopkins_kernel(s, waves):
     return np.where(s >= 2.0, 0.0, out)
 
 
+@contract(wavelength=WAVELENGTH, aperture_diameter=APERTURE_DIAMETER,
+          defocus_waves=Values(Spec("1", "defocus in waves"), optional=True),
+          defocus_opd=Values(Spec("m", "defocus optical path difference"), optional=True))
 def defocused_aperture(fx, fy, wavelength, aperture_diameter, defocus_waves=None, defocus_opd=None):
     r"""Diffraction OTF of an unobscured circular aperture with defocus.
 
@@ -288,10 +290,6 @@ def defocused_aperture(fx, fy, wavelength, aperture_diameter, defocus_waves=None
     """
     if (defocus_waves is None) == (defocus_opd is None):
         raise ValueError("give exactly one of defocus_waves or defocus_opd")
-    _positive("wavelength", wavelength)
-    _positive("aperture_diameter", aperture_diameter)
-    _finite("defocus_waves", defocus_waves)
-    _finite("defocus_opd", defocus_opd)
     waves = defocus_waves if defocus_opd is None else defocus_opd / wavelength
     s = 2.0 * np.hypot(fx, fy) * wavelength / aperture_diameter
     if not isinstance(waves, xr.DataArray):

@@ -6,11 +6,13 @@ import numpy as np
 
 from .._kernels import apply_kernel
 from .._metadata import described
-from .spectral import _positive, _require
+from ..params import Spec, Values, contract
+from ._contracts import COUNT, FOCAL_LENGTH, LENGTH, POSITIVE_NUMBER, UNIT_INTERVAL
 
 __all__ = ["detector", "aggregated_detector", "charge_transfer", "diffusion"]
 
 
+@contract(detector_width_x=LENGTH, detector_width_y=LENGTH, focal_length=FOCAL_LENGTH)
 def detector(fx, fy, detector_width_x, detector_width_y, focal_length):
     r"""OTF of the spatial integration over a rectangular detector.
 
@@ -35,9 +37,6 @@ def detector(fx, fy, detector_width_x, detector_width_y, focal_length):
     .. math:: H = \operatorname{sinc}\left(\frac{w_x f_x}{F}\right)
               \operatorname{sinc}\left(\frac{w_y f_y}{F}\right)
     """
-    _positive("detector_width_x", detector_width_x)
-    _positive("detector_width_y", detector_width_y)
-    _positive("focal_length", focal_length)
     out = apply_kernel(detector_kernel, detector_width_x, focal_length, fx, detector_width_y, fy)
     return described(out, detector)
 
@@ -57,6 +56,9 @@ def _aggregation_factor(frequency, pitch, focal_length, n):
     return total / n
 
 
+@contract(detector_width_x=LENGTH, detector_width_y=LENGTH, pixel_pitch_x=LENGTH,
+          pixel_pitch_y=LENGTH, focal_length=FOCAL_LENGTH,
+          aggregation=Spec("1", "pixels aggregated along each axis", low=1.0, whole=True))
 def aggregated_detector(
     fx,
     fy,
@@ -98,14 +100,6 @@ def aggregated_detector(
               \prod_{k\in\{x, y\}} \frac{1}{n}\sum_{i=0}^{n-1}
               \cos\left[2\pi\left(i - \frac{n-1}{2}\right)\frac{p_k f_k}{F}\right]
     """
-    if isinstance(aggregation, bool) or not isinstance(aggregation, (int, np.integer)):
-        raise ValueError(f"aggregation must be an integer >= 1; got {aggregation!r}")
-    _require("aggregation", aggregation, lambda a: a >= 1, "an integer >= 1")
-    _positive("pixel_pitch_x", pixel_pitch_x)
-    _positive("pixel_pitch_y", pixel_pitch_y)
-    _positive("detector_width_x", detector_width_x)
-    _positive("detector_width_y", detector_width_y)
-    _positive("focal_length", focal_length)
     out = apply_kernel(_aggregated_detector_kernel, pixel_pitch_x, fx, focal_length, pixel_pitch_y,
                     fy, detector_width_x, detector_width_y, aggregation=int(aggregation))
     return described(out, aggregated_detector)
@@ -120,6 +114,9 @@ def _aggregated_detector_kernel(pixel_pitch_x, fx, focal_length, pixel_pitch_y, 
             * pixel)
 
 
+@contract(pixel_pitch_x=LENGTH, pixel_pitch_y=LENGTH, focal_length=FOCAL_LENGTH,
+          transfers_x=COUNT, transfers_y=COUNT, transfer_efficiency=UNIT_INTERVAL,
+          phases=POSITIVE_NUMBER)
 def charge_transfer(
     fx,
     fy,
@@ -160,13 +157,6 @@ def charge_transfer(
     .. math:: H = \prod_{k\in\{x, y\}} \exp\left\{-N_\phi N_k (1 - \epsilon)
               \left[1 - \cos\left(\frac{2\pi p_k f_k}{F}\right)\right]\right\}
     """
-    _positive("pixel_pitch_x", pixel_pitch_x)
-    _positive("pixel_pitch_y", pixel_pitch_y)
-    _positive("focal_length", focal_length)
-    _require("transfers_x", transfers_x, lambda a: a >= 0, ">= 0")
-    _require("transfers_y", transfers_y, lambda a: a >= 0, ">= 0")
-    _require("transfer_efficiency", transfer_efficiency, lambda a: (a >= 0) & (a <= 1), "in [0, 1]")
-    _positive("phases", phases)
     out = apply_kernel(_charge_transfer_kernel, phases, transfer_efficiency, transfers_x,
                     pixel_pitch_x, fx, focal_length, transfers_y, pixel_pitch_y, fy)
     return described(out, charge_transfer)
@@ -185,6 +175,10 @@ def _charge_transfer_kernel(phases, transfer_efficiency, transfers_x, pixel_pitc
     return axis(transfers_x, pixel_pitch_x, fx) * axis(transfers_y, pixel_pitch_y, fy)
 
 
+@contract(absorption_coefficient=Values(Spec("m-1", "absorption coefficient", low=0.0,
+                                             low_open=True)),
+          depletion_width=Values(Spec("m", "depletion width", low=0.0)),
+          diffusion_length=LENGTH, focal_length=FOCAL_LENGTH)
 def diffusion(fx, fy, absorption_coefficient, depletion_width, diffusion_length, focal_length):
     r"""OTF of minority-carrier diffusion in a front-illuminated CCD.
 
@@ -218,10 +212,6 @@ def diffusion(fx, fy, absorption_coefficient, depletion_width, diffusion_length,
 
     A demonstration model: it does not describe modern detector structures.
     """
-    _positive("absorption_coefficient", absorption_coefficient)
-    _require("depletion_width", depletion_width, lambda a: a >= 0, ">= 0")
-    _positive("diffusion_length", diffusion_length)
-    _positive("focal_length", focal_length)
     out = apply_kernel(_diffusion_kernel, absorption_coefficient, depletion_width, diffusion_length,
                     fx, fy, focal_length)
     return described(out, diffusion)

@@ -9,7 +9,8 @@ from scipy.interpolate import RegularGridInterpolator
 
 from .._kernels import apply_kernel
 from .._metadata import described
-from .spectral import _nonnegative, _positive
+from ..params import Values, contract
+from ._contracts import ANGLE, BLUR
 
 __all__ = ["gaussian", "sharpening_filter", "FILTER_METHODS"]
 
@@ -19,6 +20,7 @@ PYBSM_FFT_SIZE = 100
 """Zero-padded FFT size of pyBSM 0.16.1's ``filter_OTF``."""
 
 
+@contract(blur_size_x=BLUR, blur_size_y=BLUR)
 def gaussian(fx, fy, blur_size_x, blur_size_y):
     r"""Real Gaussian OTF parameterised by the blur-spot size.
 
@@ -43,8 +45,6 @@ def gaussian(fx, fy, blur_size_x, blur_size_y):
 
     .. math:: H = \exp\left[-\pi\left(b_x^2 f_x^2 + b_y^2 f_y^2\right)\right]
     """
-    _nonnegative("blur_size_x", blur_size_x)
-    _nonnegative("blur_size_y", blur_size_y)
     out = apply_kernel(_gaussian_kernel, fx, blur_size_x, fy, blur_size_y)
     return described(out, gaussian)
 
@@ -85,6 +85,7 @@ def pybsm_filter_kernel(u, v, kernel, ifov):
     return lookup((wrap(u), wrap(v)))
 
 
+@contract(ifov_x=ANGLE, ifov_y=Values(ANGLE.spec, optional=True))
 def sharpening_filter(fx, fy, kernel, ifov_x, ifov_y=None, method="dtft"):
     r"""OTF of a discrete filter kernel applied to the sampled image.
 
@@ -129,8 +130,6 @@ def sharpening_filter(fx, fy, kernel, ifov_x, ifov_y=None, method="dtft"):
     if method not in FILTER_METHODS:
         raise ValueError(f"method must be one of {FILTER_METHODS}; got {method!r}")
     k = _as_kernel(kernel)
-    _positive("ifov_x", ifov_x)
-    _positive("ifov_y", ifov_y)
     if method == "pybsm":
         if isinstance(ifov_x, xr.DataArray):
             raise ValueError("ifov_x must be a float for method='pybsm'")

@@ -6,11 +6,14 @@ import numpy as np
 
 from .._kernels import apply_kernel
 from .._metadata import described
-from .spectral import _finite, _nonnegative, _positive, _require
+from ..params import contract
+from ._contracts import BLUR, FOCAL_LENGTH, LENGTH, POSITIVE_NUMBER, RATE
+from .spectral import is_lazy
 
 __all__ = ["jitter", "drift", "tdi"]
 
 
+@contract(jitter_rms_x=BLUR, jitter_rms_y=BLUR)
 def jitter(fx, fy, jitter_rms_x, jitter_rms_y):
     r"""Blur OTF of random high-frequency line-of-sight jitter.
 
@@ -33,8 +36,6 @@ def jitter(fx, fy, jitter_rms_x, jitter_rms_y):
 
     .. math:: H = \exp\left[-2\pi^2\left(\sigma_x^2 f_x^2 + \sigma_y^2 f_y^2\right)\right]
     """
-    _nonnegative("jitter_rms_x", jitter_rms_x)
-    _nonnegative("jitter_rms_y", jitter_rms_y)
     out = apply_kernel(jitter_kernel, jitter_rms_x, fx, jitter_rms_y, fy)
     return described(out, jitter)
 
@@ -44,6 +45,7 @@ def jitter_kernel(jitter_rms_x, fx, jitter_rms_y, fy):
     return np.exp(-2.0 * np.pi**2 * (jitter_rms_x**2 * fx**2 + jitter_rms_y**2 * fy**2))
 
 
+@contract(drift_x=RATE, drift_y=RATE)
 def drift(fx, fy, drift_x, drift_y):
     r"""Blur OTF of constant line-of-sight drift during one integration.
 
@@ -67,8 +69,6 @@ def drift(fx, fy, drift_x, drift_y):
 
     .. math:: H = \operatorname{sinc}(a_x f_x)\,\operatorname{sinc}(a_y f_y)
     """
-    _finite("drift_x", drift_x)
-    _finite("drift_y", drift_y)
     out = apply_kernel(drift_kernel, drift_x, fx, drift_y, fy)
     return described(out, drift)
 
@@ -78,6 +78,8 @@ def drift_kernel(drift_x, fx, drift_y, fy):
     return np.sinc(drift_x * fx) * np.sinc(drift_y * fy)
 
 
+@contract(detector_width=LENGTH, focal_length=FOCAL_LENGTH, rate_ratio=POSITIVE_NUMBER,
+          stages=POSITIVE_NUMBER, phases=POSITIVE_NUMBER)
 def tdi(frequency, detector_width, focal_length, stages, rate_ratio, phases=1):
     r"""OTF of a mismatch between the TDI clock rate and the image motion.
 
@@ -118,17 +120,11 @@ def tdi(frequency, detector_width, focal_length, stages, rate_ratio, phases=1):
     :math:`M^2 10^{-16}`). pyBSM loops over ``np.arange(n_tdi * phases_n)`` and so
     accepts a fractional stage count, giving OTF(0) != 1; here it is rejected.
     """
-    _positive("detector_width", detector_width)
-    _positive("focal_length", focal_length)
-    _positive("rate_ratio", rate_ratio)
-    _require("stages", stages, lambda a: a > 0, "> 0")
-    _require("phases", phases, lambda a: a > 0, "> 0")
-    _require(
-        "stages",
-        stages * phases,
-        lambda a: (a >= 1) & (a == np.round(a)),
-        "such that stages * phases is a positive integer",
-    )
+    if not (is_lazy(stages) or is_lazy(phases)):  # a rule on two arguments together
+        product = np.asarray(stages * phases, dtype=float)
+        if not np.all((product >= 1) & (product == np.round(product))):
+            raise ValueError("stages must make stages * phases a whole number >= 1; got "
+                             f"stages {stages!r}, phases {phases!r}")
     out = apply_kernel(_tdi_kernel, detector_width, frequency, focal_length, rate_ratio, stages,
                     phases, dtype=complex)
     return described(out, tdi)

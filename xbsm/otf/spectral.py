@@ -1,8 +1,10 @@
 """Spectral weighting of wavelength-dependent OTFs (paper Eq. 3).
 
-This module also holds the input validation every OTF module uses at its
-public boundary; the CF attributes of a result come from
-:func:`xbsm._metadata.described` (the first docstring line is the ``long_name``).
+The OTF mechanisms declare their checked arguments with :func:`xbsm.params.contract`
+(the shared rules are in ``xbsm/otf/_contracts.py``); ``_require`` and its shorthands
+below serve :mod:`xbsm.otf.defocus` until it does the same. The CF attributes of a
+result come from :func:`xbsm._metadata.described` (the first docstring line is the
+``long_name``).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import xarray as xr
 
 from .._kernels import apply_kernel
 from .._metadata import described
+from ._contracts import Weights
 
 __all__ = ["spectral_average"]
 
@@ -165,8 +168,7 @@ def spectral_average(otf, weights, dim: str = "wavelength"):
         raise ValueError(f"weights must be a DataArray with dimension {dim!r}")
     if dim not in otf.dims:
         raise ValueError(f"otf must have dimension {dim!r}; it has {otf.dims}")
-    _nonnegative("weights", weights)
-    _require("weights", weights.sum(dim), lambda a: a > 0, f"not all zero along {dim!r}")
+    Weights(dim).check("weights", weights)
     out = apply_kernel(weighted_sum_kernel, otf, weights, core=[[dim], [dim]],
                        dtype=np.result_type(otf.dtype, weights.dtype))
     return described(out, spectral_average)

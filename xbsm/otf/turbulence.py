@@ -5,16 +5,23 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-import xarray as xr
 
 from .._kernels import apply_kernel
 from .._metadata import described
 from ..geometry import altitude_along_path
+from ..params import Spec, Values, contract
 from ..quadrature import legendre_nodes
+from ._contracts import (
+    APERTURE_DIAMETER,
+    CN2,
+    DURATION,
+    LENGTH,
+    SPEED,
+    UNIT_INTERVAL,
+    WAVELENGTH,
+    Weights,
+)
 from .spectral import (
-    _nonnegative,
-    _positive,
-    _require,
     _spectral,
     weighted_sum_kernel,
 )
@@ -40,6 +47,7 @@ PATH_RULES = ("trapezoid", "gauss-legendre")
 _BLOCK = 1 << 16
 
 
+@contract(cn2_at_1m=CN2)
 def hufnagel_valley(altitude, high_altitude_wind_speed=21.0, cn2_at_1m=1.7e-14):
     r"""Hufnagel-Valley refractive-index structure parameter profile.
 
@@ -65,7 +73,6 @@ def hufnagel_valley(altitude, high_altitude_wind_speed=21.0, cn2_at_1m=1.7e-14):
     .. math:: C_n^2(h) = 5.94\times10^{-53}\left(\frac{v}{27}\right)^2 h^{10} e^{-h/1000}
               + 2.7\times10^{-16} e^{-h/1500} + C_n^2(1\,\mathrm{m})\, e^{-h/100}
     """
-    _nonnegative("cn2_at_1m", cn2_at_1m)
     out = apply_kernel(_hufnagel_valley_kernel, high_altitude_wind_speed, altitude, cn2_at_1m)
     return described(out, hufnagel_valley, units="m-2/3")
 
@@ -86,6 +93,7 @@ def _r0_from_integral(integral, wavelength):
     return (0.423 * k**2 * integral) ** (-3.0 / 5.0)
 
 
+@contract(wavelength=WAVELENGTH)
 def path_coherence_diameter(cn2, wavelength=REFERENCE_WAVELENGTH, path_dim="path"):
     r"""Spherical-wave coherence diameter from sampled Cn2 along a path (trapezoid rule).
 
@@ -118,7 +126,6 @@ def path_coherence_diameter(cn2, wavelength=REFERENCE_WAVELENGTH, path_dim="path
     """
     if path_dim not in cn2.dims or path_dim not in cn2.coords:
         raise ValueError(f"cn2 must have a {path_dim!r} dimension with a distance coordinate")
-    _positive("wavelength", wavelength)
     z = cn2[path_dim]
     integral = (cn2 * (z / z.max()) ** (5.0 / 3.0)).integrate(path_dim)
     out = _r0_from_integral(integral, wavelength)
@@ -143,6 +150,11 @@ def path_nodes(path_samples, rule):
     return t, w
 
 
+@contract(slant_range=LENGTH,
+          cn2_at_1m=Values(Spec("m-2/3", "refractive-index structure parameter", low=0.0,
+                                low_open=True)),
+          wavelength=WAVELENGTH,
+          path_samples=Spec("1", "samples along the path", low=2.0, whole=True))
 def slant_path_coherence_diameter(
     slant_range,
     sensor_altitude,
@@ -198,12 +210,6 @@ def slant_path_coherence_diameter(
     """
     if rule not in PATH_RULES:
         raise ValueError(f"rule must be one of {PATH_RULES}; got {rule!r}")
-    if isinstance(path_samples, bool) or not isinstance(path_samples, (int, np.integer)):
-        raise ValueError(f"path_samples must be an integer >= 2; got {path_samples!r}")
-    _require("path_samples", path_samples, lambda a: a >= 2, "an integer >= 2")
-    _positive("slant_range", slant_range)
-    _positive("cn2_at_1m", cn2_at_1m)
-    _positive("wavelength", wavelength)
     out = apply_kernel(slant_path_kernel, wavelength, high_altitude_wind_speed, slant_range,
                     sensor_altitude, target_altitude, cn2_at_1m,
                     nodes=path_nodes(int(path_samples), rule), form=geometry_form)
@@ -234,6 +240,8 @@ def slant_path_kernel(wavelength, high_altitude_wind_speed, slant_range, sensor_
     return _r0_from_integral(integral, wavelength)
 
 
+@contract(coherence_diameter=LENGTH, wavelength=WAVELENGTH,
+          reference_wavelength=WAVELENGTH)
 def scale_coherence_diameter(
     coherence_diameter, wavelength, reference_wavelength=REFERENCE_WAVELENGTH
 ):
@@ -257,9 +265,6 @@ def scale_coherence_diameter(
     -----
     .. math:: r_0(\lambda) = r_0(\lambda_0)\,(\lambda/\lambda_0)^{6/5}
     """
-    _positive("coherence_diameter", coherence_diameter)
-    _positive("wavelength", wavelength)
-    _positive("reference_wavelength", reference_wavelength)
     out = apply_kernel(_scale_kernel, coherence_diameter, wavelength, reference_wavelength)
     return described(out, scale_coherence_diameter, units="m")
 
@@ -269,6 +274,8 @@ def _scale_kernel(coherence_diameter, wavelength, reference_wavelength):
     return coherence_diameter * (wavelength / reference_wavelength) ** (6.0 / 5.0)
 
 
+@contract(coherence_diameter=LENGTH, wavelength=WAVELENGTH, weights=Weights(),
+          reference_wavelength=WAVELENGTH)
 def band_coherence_diameter(
     coherence_diameter, wavelength, weights, reference_wavelength=REFERENCE_WAVELENGTH
 ):
@@ -296,14 +303,6 @@ def band_coherence_diameter(
 
     .. math:: \bar r_0 = \sum_\lambda w(\lambda)\, r_0(\lambda)
     """
-    _positive("coherence_diameter", coherence_diameter)
-    _positive("wavelength", wavelength)
-    _positive("reference_wavelength", reference_wavelength)
-    if not isinstance(weights, xr.DataArray) or "wavelength" not in weights.dims:
-        raise ValueError("weights must be a DataArray with dimension 'wavelength'")
-    _nonnegative("weights", weights)
-    _require("weights", weights.sum("wavelength"), lambda a: a > 0,
-             "not all zero along 'wavelength'")
     out = _spectral(band_kernel, coherence_diameter, reference_wavelength, wavelength, weights)
     return described(out, band_coherence_diameter, units="m")
 
@@ -315,6 +314,8 @@ def band_kernel(coherence_diameter, reference_wavelength, wavelength, weights):
     return weighted_sum_kernel(r0, weights)
 
 
+@contract(wavelength=WAVELENGTH, aperture_diameter=APERTURE_DIAMETER,
+          coherence_diameter=LENGTH, exposure_coefficient=UNIT_INTERVAL)
 def turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, exposure_coefficient=0.0):
     r"""Long- or short-exposure atmospheric turbulence OTF.
 
@@ -347,12 +348,6 @@ def turbulence(fx, fy, wavelength, aperture_diameter, coherence_diameter, exposu
     :math:`\rho = D/(\alpha^3\lambda)` it exceeds 1 (not clipped, as in pyBSM;
     the aperture OTF is zero there).
     """
-    _positive("wavelength", wavelength)
-    _positive("aperture_diameter", aperture_diameter)
-    _positive("coherence_diameter", coherence_diameter)
-    _require(
-        "exposure_coefficient", exposure_coefficient, lambda a: (a >= 0) & (a <= 1), "in [0, 1]"
-    )
     out = apply_kernel(_turbulence_xy_kernel, wavelength, coherence_diameter, fx, fy,
                     exposure_coefficient, aperture_diameter)
     return described(out, turbulence)
@@ -383,6 +378,8 @@ def _long_exposure_exponent(radial, wavelength, coherence_diameter):
     return -3.44 * (wavelength / coherence_diameter * radial) ** (5.0 / 3.0)
 
 
+@contract(wavelength=WAVELENGTH, aperture_diameter=APERTURE_DIAMETER,
+          coherence_diameter=LENGTH, integration_time=DURATION, wind_speed=SPEED)
 def wind_blended_turbulence(
     fx, fy, wavelength, aperture_diameter, coherence_diameter, integration_time, wind_speed
 ):
@@ -415,11 +412,6 @@ def wind_blended_turbulence(
 
     .. math:: H = w H_{0.5} + (1 - w) H_0,\quad w = e^{-v t / r_0}
     """
-    _positive("wavelength", wavelength)
-    _positive("aperture_diameter", aperture_diameter)
-    _positive("coherence_diameter", coherence_diameter)
-    _nonnegative("integration_time", integration_time)
-    _nonnegative("wind_speed", wind_speed)
     out = apply_kernel(_wind_blended_xy_kernel, wind_speed, integration_time, coherence_diameter,
                     wavelength, fx, fy, aperture_diameter)
     return described(out, wind_blended_turbulence)
@@ -443,6 +435,8 @@ def _wind_blended_kernel(radial, wavelength, aperture_diameter, coherence_diamet
     return weight * short + (1.0 - weight) * long
 
 
+@contract(aperture_diameter=APERTURE_DIAMETER, coherence_diameter=LENGTH,
+          reference_wavelength=WAVELENGTH, integration_time=DURATION, wind_speed=SPEED)
 def polychromatic_turbulence(
     fx,
     fy,
@@ -491,11 +485,6 @@ def polychromatic_turbulence(
     here that is :func:`slant_path_coherence_diameter` and the band r0 is
     :func:`band_coherence_diameter`.
     """
-    _positive("aperture_diameter", aperture_diameter)
-    _positive("coherence_diameter", coherence_diameter)
-    _positive("reference_wavelength", reference_wavelength)
-    _nonnegative("integration_time", integration_time)
-    _nonnegative("wind_speed", wind_speed)
     out = _spectral(_polychromatic_xy_kernel, fx, fy, coherence_diameter, integration_time,
                     wind_speed, aperture_diameter, reference_wavelength, wavelength, weights)
     return described(out, polychromatic_turbulence)

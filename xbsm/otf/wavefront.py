@@ -6,11 +6,16 @@ import numpy as np
 
 from .._kernels import apply_kernel
 from .._metadata import described
-from .spectral import _nonnegative, _positive, _require
+from ..params import Spec, Values, contract
+from ._contracts import APERTURE_DIAMETER, LENGTH, WAVELENGTH
 
 __all__ = ["random_phase_wavefront", "shannon_wavefront"]
 
 
+@contract(wavelength=WAVELENGTH,
+          phase_variance=Values(Spec("rad2", "phase variance", low=0.0)),
+          correlation_length_x=LENGTH, correlation_length_y=LENGTH,
+          phase_variance_wavelength=Values(WAVELENGTH.spec, optional=True))
 def random_phase_wavefront(
     fx,
     fy,
@@ -53,11 +58,6 @@ def random_phase_wavefront(
               \left(\frac{f_x^2}{L_x^2} + \frac{f_y^2}{L_y^2}\right)\right)\right]\right\},
               \quad \sigma^2 = \sigma^2_{pv}\left(\frac{\lambda_{pv}}{\lambda}\right)^2
     """
-    _positive("wavelength", wavelength)
-    _nonnegative("phase_variance", phase_variance)
-    _positive("correlation_length_x", correlation_length_x)
-    _positive("correlation_length_y", correlation_length_y)
-    _positive("phase_variance_wavelength", phase_variance_wavelength)
     # the variance at its own wavelength: (lambda / lambda)^2 = 1 exactly
     reference = wavelength if phase_variance_wavelength is None else phase_variance_wavelength
     out = apply_kernel(random_phase_kernel, phase_variance, reference, wavelength, fx,
@@ -83,6 +83,8 @@ def _shannon_kernel(rms_wavefront_error, fx, fy, wavelength, aperture_diameter, 
     return 1.0 - (rms_wavefront_error / 0.18) ** 2 * (1.0 - 4.0 * (nu - 0.5) ** 2)
 
 
+@contract(wavelength=WAVELENGTH, aperture_diameter=APERTURE_DIAMETER,
+          rms_wavefront_error=Values(Spec("1", "rms wavefront error in waves", 0.0, 0.18)))
 def shannon_wavefront(fx, fy, wavelength, aperture_diameter, rms_wavefront_error, clip=True):
     r"""Shannon's quadratic approximation of the MTF loss from random wavefront error.
 
@@ -115,11 +117,6 @@ def shannon_wavefront(fx, fy, wavelength, aperture_diameter, rms_wavefront_error
 
     .. math:: H = 1 - \left(\frac{W}{0.18}\right)^2\left[1 - 4(\nu - 0.5)^2\right]
     """
-    _positive("wavelength", wavelength)
-    _positive("aperture_diameter", aperture_diameter)
-    _require(
-        "rms_wavefront_error", rms_wavefront_error, lambda a: (a >= 0) & (a <= 0.18), "in [0, 0.18]"
-    )
     out = apply_kernel(_shannon_kernel, rms_wavefront_error, fx, fy, wavelength, aperture_diameter,
                     clip=bool(clip))
     return described(out, shannon_wavefront)
