@@ -257,6 +257,18 @@ ERROR_ROWS = [
     ("otf_defocus_coefficient_focal_length_nan",
      lambda: xbsm.otf.aperture.defocus_wavefront_coefficient(1e-5, 0.275, np.nan), ValueError,
      "focal_length must lie in (0, inf) m; got nan"),
+    ("otf_gaussian_defocus_size_negative", lambda: xbsm.otf.defocus.gaussian_defocus(
+        FX, FY, -1e-6, 0.0), ValueError,
+     "blur_radius_x must lie in [0, inf) rad; got -1e-06"),
+    ("otf_object_defocus_focus_range_zero",
+     lambda: xbsm.otf.defocus.object_domain_defocus_radius(0.275, 1000.0, 0.0), ValueError,
+     "focus_range must lie in (0, inf] m; got 0.0"),
+    ("otf_object_defocus_object_range_nan",
+     lambda: xbsm.otf.defocus.object_domain_defocus_radius(0.275, np.nan, np.inf), ValueError,
+     "object_range must lie in (0, inf] m; got nan"),
+    ("otf_image_defocus_focal_length_negative",
+     lambda: xbsm.otf.defocus.image_domain_defocus_radius(0.275, 1e-5, -4.0), ValueError,
+     "focal_length must lie in (0, inf) m; got -4.0"),
     ("otf_detector_width_negative", lambda: xbsm.otf.detector.detector(FX, FY, -8e-6, 8e-6, 4.0),
      ValueError, "detector_width_x must lie in (0, inf) m; got -8e-06"),
     ("otf_aggregation_fractional", lambda: xbsm.otf.detector.aggregated_detector(

@@ -268,20 +268,14 @@ def _scan(checker, **kwargs) -> set:
     return found
 
 
-_VALIDATOR = ("an otf validator: one declared contract per public function replaces the "
-              "per-module validators (issue 22 item 3)")
 _BOUNDARY = ("otf's own kernel boundary, one of the four that issue 22 item 3 merges into "
              "xr.apply_ufunc")
 
 #: (importing module, private name it uses) -> why it is allowed for now. Keep it shrinking:
 #: when this test was written the package had 88 such pairs (issue 22 counted 133 before the
 #: model chain was written once); the 67 outside these two cases were made public instead,
-#: and 17 of the 21 left (otf validators) became declared contracts.
+#: and the 21 otf validator uses left became declared contracts.
 ALLOWED: dict[tuple[str, str], str] = {
-    # otf.spectral's old validators, still used by otf.defocus (being rewritten on its own
-    # branch); every other OTF mechanism declares its contract (xbsm/otf/_contracts.py)
-    ("xbsm.otf.defocus", "xbsm.otf.spectral._nonnegative"): _VALIDATOR,
-    ("xbsm.otf.defocus", "xbsm.otf.spectral._positive"): _VALIDATOR,
     ("xbsm.otf.system", "xbsm.otf.spectral._spectral"): _BOUNDARY,
     ("xbsm.otf.turbulence", "xbsm.otf.spectral._spectral"): _BOUNDARY,
 }

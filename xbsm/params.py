@@ -112,11 +112,13 @@ class Values:
     """A physical argument (a float, an array or an eager DataArray) inside ``spec``'s interval.
 
     NaN counts as outside; dask-backed values are not computed to be checked.
-    ``optional``: None is allowed (the argument is not given).
+    ``optional``: None is allowed (the argument is not given). ``infinite``: +inf is
+    allowed too (a range to a focus at infinity), closing the interval's unbounded end.
     """
 
     spec: Spec
     optional: bool = False
+    infinite: bool = False
 
     def check(self, name: str, value):
         """``value`` unchanged if every one of its values lies in the interval."""
@@ -126,8 +128,14 @@ class Values:
             return value
         values = np.asarray(value, dtype=float)
         mask = self.spec.violated(values)
+        if self.infinite:
+            mask &= ~np.isposinf(values)
         if np.any(mask):
-            _raise(name, self.spec, values[mask].ravel()[0] if values.ndim else values)
+            bad = float(values[mask].ravel()[0] if values.ndim else values)
+            if self.infinite:
+                raise ValueError(f"{name} must lie in {self.spec.interval()[:-1]}] "
+                                 f"{self.spec.units}; got {bad!r}")
+            _raise(name, self.spec, bad)
         return value
 
 

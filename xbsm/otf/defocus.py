@@ -20,8 +20,8 @@ from .._kernels import apply_kernel
 from .._metadata import described
 from ..methods import KNOB_CHOICES
 from ..params import Choice, Spec, Values, contract
+from ._contracts import APERTURE_DIAMETER, FOCAL_LENGTH
 from .aperture import circular_aperture_kernel, hopkins_kernel
-from .spectral import _nonnegative, _positive
 
 __all__ = ["DEFOCUS_MODELS", "IBSM_GAUSSIAN_FRACTION", "annular_defocus_kernel",
            "blur_circle_diameter", "defocused_aperture_kernel", "defocused_aperture_otf",
@@ -36,10 +36,11 @@ IBSM_GAUSSIAN_FRACTION = 0.62
 3-27: w = 0.62 D dz / f^2, and d = D dz / f^2 is the paraxial blur circle). [1]"""
 
 _OPD = Values(Spec("m", "defocus wavefront coefficient W020", low=0.0))
-_DIAMETER = Values(Spec("m", "effective aperture diameter", low=0.0, low_open=True))
+_GAUSSIAN_SIZE = Values(Spec("rad", "Gaussian defocus size w (PSF 1/e diameter)", low=0.0))
+_RANGE = Values(Spec("m", "range", low=0.0, low_open=True), infinite=True)
 
 
-@contract(defocus_opd=_OPD, aperture_diameter=_DIAMETER)
+@contract(defocus_opd=_OPD, aperture_diameter=APERTURE_DIAMETER)
 def blur_circle_diameter(defocus_opd, aperture_diameter):
     r"""Angular diameter of the geometrical-optics blur circle of a defocus W020.
 
@@ -217,7 +218,7 @@ def _segment(lo, hi, radius, centre, a, t, wt):
 
 
 @contract(wavelength=Values(Spec("m", "wavelength", low=0.0, low_open=True)),
-          aperture_diameter=_DIAMETER,
+          aperture_diameter=APERTURE_DIAMETER,
           defocus_opd=_OPD,
           obscuration_ratio=Values(Spec("1", "relative linear obscuration", 0.0, 1.0,
                                         high_open=True)),
@@ -272,6 +273,7 @@ def _defocused_xy_kernel(fx, fy, aperture_diameter, wavelength, obscuration_rati
                                      obscuration_ratio, defocus_opd, model)
 
 
+@contract(blur_radius_x=_GAUSSIAN_SIZE, blur_radius_y=_GAUSSIAN_SIZE)
 def gaussian_defocus(fx, fy, blur_radius_x, blur_radius_y):
     r"""Gaussian approximation of the defocus OTF near the optical axis.
 
@@ -300,12 +302,11 @@ def gaussian_defocus(fx, fy, blur_radius_x, blur_radius_y):
     diameter, :func:`blur_circle_diameter`); docs/otf.md compares it with Hopkins'
     exact OTF (``model="hopkins"``).
     """
-    _nonnegative("blur_radius_x", blur_radius_x)
-    _nonnegative("blur_radius_y", blur_radius_y)
     out = np.exp((-(np.pi**2) / 4.0) * (blur_radius_x**2 * fx**2 + blur_radius_y**2 * fy**2))
     return described(out, gaussian_defocus)
 
 
+@contract(aperture_diameter=APERTURE_DIAMETER, object_range=_RANGE, focus_range=_RANGE)
 def object_domain_defocus_radius(aperture_diameter, object_range, focus_range):
     r"""Angular defocus blur size w (IBSM's "1/e radius") for an object away from focus.
 
@@ -330,13 +331,11 @@ def object_domain_defocus_radius(aperture_diameter, object_range, focus_range):
 
     .. math:: w = 0.62\,D\,\left|\frac{1}{R} - \frac{1}{R_0}\right|
     """
-    _positive("aperture_diameter", aperture_diameter)
-    _positive("object_range", object_range)
-    _positive("focus_range", focus_range)
     out = 0.62 * aperture_diameter * np.abs(1.0 / object_range - 1.0 / focus_range)
     return described(out, object_domain_defocus_radius, units="rad")
 
 
+@contract(aperture_diameter=APERTURE_DIAMETER, focal_length=FOCAL_LENGTH)
 def image_domain_defocus_radius(aperture_diameter, focus_shift, focal_length):
     r"""Angular defocus blur size w (IBSM's "1/e radius") for a focus shift at the detector.
 
@@ -361,7 +360,5 @@ def image_domain_defocus_radius(aperture_diameter, focus_shift, focal_length):
 
     .. math:: w = 0.62\,D\,\frac{|\Delta z|}{f^2}
     """
-    _positive("aperture_diameter", aperture_diameter)
-    _positive("focal_length", focal_length)
     out = 0.62 * aperture_diameter * np.abs(focus_shift) / focal_length**2
     return described(out, image_domain_defocus_radius, units="rad")

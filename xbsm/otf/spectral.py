@@ -1,8 +1,7 @@
 """Spectral weighting of wavelength-dependent OTFs (paper Eq. 3).
 
 The OTF mechanisms declare their checked arguments with :func:`xbsm.params.contract`
-(the shared rules are in ``xbsm/otf/_contracts.py``); ``_require`` and its shorthands
-below serve :mod:`xbsm.otf.defocus` until it does the same. The CF attributes of a
+(the shared rules are in ``xbsm/otf/_contracts.py``). The CF attributes of a
 result come from :func:`xbsm._metadata.described` (the first docstring line is the
 ``long_name``).
 """
@@ -25,41 +24,6 @@ def is_lazy(value) -> bool:
     """Tell whether ``value`` is dask-backed (checking it would compute it)."""
     data = getattr(value, "data", value)
     return type(data).__module__.startswith("dask")
-
-
-def _require(name: str, value, condition, allowed: str) -> None:
-    """Raise ``ValueError`` naming ``name`` unless ``condition(value)`` holds everywhere.
-
-    ``condition`` receives a numpy array and returns a boolean array. NaN
-    fails every condition. Dask-backed values are not checked, so that
-    validation never triggers a computation.
-    """
-    if value is None or is_lazy(value):
-        return
-    arr = np.asarray(getattr(value, "values", value))
-    with np.errstate(invalid="ignore"):
-        ok = np.all(condition(arr))
-    if not ok:
-        raise ValueError(f"{name} must be {allowed}; got {_describe(arr)}")
-
-
-def _describe(arr: np.ndarray) -> str:
-    flat = np.ravel(arr)
-    if flat.size == 1:
-        return repr(flat[0].item())
-    return f"values in [{np.nanmin(flat)!r}, {np.nanmax(flat)!r}] (size {flat.size})"
-
-
-def _positive(name: str, value) -> None:
-    _require(name, value, lambda a: a > 0, "> 0")
-
-
-def _nonnegative(name: str, value) -> None:
-    _require(name, value, lambda a: a >= 0, ">= 0")
-
-
-def _finite(name: str, value) -> None:
-    _require(name, value, np.isfinite, "finite")
 
 
 def _spectral(func, *args, spectral: int = 2, dtype=float, blocked: bool = False, **knobs):
