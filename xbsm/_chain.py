@@ -126,7 +126,8 @@ def _edge_chain(ap, r, atm, cutoff, view, m) -> dict:
     flags = ap.flag(ap.no_flags(), "undersampled_grid", coarse)
     if "edge_error" in terms:
         # the rule's own estimate, both slices through the GIQE's sensitivity (issue 23)
-        unresolved = terms.pop("edge_error") > m.edge_error_tolerance
+        unresolved = terms["edge_error"] > m.edge_error_tolerance
+        terms = {name: terms[name] for name in terms if name != "edge_error"}
     else:
         # on the worse slice: a one-axis smear leaves the geometric mean above the
         # threshold while its own slice is not resolved

@@ -353,16 +353,32 @@ def kronrod_sensors(c, ifov, drift, *, nodes_per_panel, panels_per_oscillation, 
     nodes[...] = flat_c  # padding
     for count, steps in set(zip(uniform.tolist(), graded.tolist())):
         which = np.flatnonzero((uniform == count) & (graded == steps))
-        h = flat_c[which] / count
-        geometric = h * float(grading_ratio) ** -np.arange(steps, 0, -1.0)[:, None]
-        edges = np.concatenate([np.zeros((1, which.size)), geometric,
-                                h * np.arange(1.0, count + 1)[:, None]])
-        edges[-1] = flat_c[which]
+        edges = _graded_edges(flat_c[which], count, steps, grading_ratio)
         head = (count + steps) * per_panel
         nodes[:head, which], weights[:head, which], error[:head, which] = _kronrod_panels(
             edges, nodes_per_panel)
     shape = (size,) + c.shape
     return nodes.reshape(shape), weights.reshape(shape), error.reshape(shape)
+
+
+def _graded_edges(cutoffs, count, steps, ratio):
+    """Panel edges (edge, sensor): ``count`` uniform panels to each cutoff, the first split
+    geometrically into ``steps`` + 1 panels of ratio ``ratio`` toward 0."""
+    h = cutoffs / count
+    geometric = h * float(ratio) ** -np.arange(steps, 0, -1.0)[:, None]
+    edges = np.concatenate([np.zeros((1, cutoffs.size)), geometric,
+                            h * np.arange(1.0, count + 1)[:, None]])
+    edges[-1] = cutoffs
+    return edges
+
+
+def _panel_edges_with(edges, breakpoints, cutoff):
+    """``edges`` with the ``breakpoints`` inside (0, cutoff) added (merged at rounding level)."""
+    bp = np.asarray(breakpoints, dtype=float).ravel()
+    bp = bp[(bp > 0) & (bp < cutoff)]
+    edges = np.unique(np.concatenate([edges, bp]))
+    keep = np.concatenate([[True], np.diff(edges) > 1e-12 * cutoff])
+    return edges[keep]
 
 
 def _too_many(count, max_nodes, cutoff, ifov_max):
@@ -501,6 +517,16 @@ def edge_quadrature(*, cutoff, ifov, rule, grid_size, nodes_per_panel, panels_pe
             nodes_per_panel=nodes_per_panel, panels_per_oscillation=panels_per_oscillation,
             min_panels=min_panels, grading_ratio=grading_ratio,
             graded_frequency=graded_frequency, max_nodes=max_nodes)
+        if breakpoints is not None:  # the same panels, split at the kinks
+            _, uniform, graded, _ = _kronrod_counts(
+                np.asarray(cutoff), np.asarray(ifov_max), np.asarray(float(drift)),
+                nodes_per_panel=nodes_per_panel, panels_per_oscillation=panels_per_oscillation,
+                min_panels=min_panels, grading_ratio=grading_ratio,
+                graded_frequency=graded_frequency, max_nodes=max_nodes)
+            edges = _graded_edges(np.array([cutoff]), int(uniform), int(graded),
+                                  grading_ratio)[:, 0]
+            nodes, weights, error = _kronrod_panels(
+                _panel_edges_with(edges, breakpoints, cutoff), nodes_per_panel)
         node_da, w_da = _pack(nodes, weights, nodes, {
             "quadrature_rule": rule, "nodes_per_panel": int(nodes_per_panel),
             "quadrature_preset": name, "cutoff_frequency": cutoff})
