@@ -155,18 +155,20 @@ def test_panel_count_follows_oscillation_count():
 def test_kronrod_panels_are_uniform_then_graded_then_one_per_drift_lobe():
     m = xbsm.method("accurate")
     per_panel = 2 * m.nodes_per_panel + 1  # Kronrod
-    # Q = 0.05: 60 uniform panels of 1/3 cycle/px; the first split by 4 down to 1e-3
-    # cycle/px: ceil(log(333) / log 4) = 5 more panels
+    # Q = 0.05: 60 uniform panels of 1/3 cycle/px; the first split by 4 down to the
+    # graded frequency: ceil(log(1/3 / g) / log 4) more panels
+    steps = int(np.ceil(np.log(1 / 3 / m.graded_frequency) / np.log(m.grading_ratio)))
     nodes, w = quadrature.edge_quadrature(cutoff=20 / IFOV, ifov=IFOV, **knobs("accurate"))
-    assert nodes.sizes["frequency"] == (60 + 5) * per_panel
+    assert nodes.sizes["frequency"] == (60 + steps) * per_panel
     assert float(w.sum()) == pytest.approx(20 / IFOV, rel=1e-14)
-    assert nodes.values.min() < 1e-3 / IFOV / 4  # inside the last graded panel
+    assert nodes.values.min() < m.graded_frequency / IFOV / m.grading_ratio
     # a drift of 500 px over the exposure: one panel per sinc lobe, 500 * 0.5 = 250 lobes
-    # below a cutoff of 0.5 cycle/px, the first panel 2e-3 cycle/px -> 1 graded step
+    # below a cutoff of 0.5 cycle/px; the first panel, 2e-3 cycle/px, is graded no further
+    # with graded_frequency=2e-3
     drift = 500 * IFOV
     nodes, w = quadrature.edge_quadrature(cutoff=0.5 / IFOV, ifov=IFOV, drift=drift,
-                                          **knobs("accurate"))
-    assert nodes.sizes["frequency"] == (250 + 1) * per_panel
+                                          **knobs("accurate", graded_frequency=2e-3))
+    assert nodes.sizes["frequency"] == 250 * per_panel
     # the rule integrates the sinc's own closed form: int_0^c sinc(a f) df = Si(pi a c)/(pi a)
     from scipy.special import sici
     exact = sici(np.pi * drift * 0.5 / IFOV)[0] / (np.pi * drift)

@@ -196,7 +196,7 @@ _PRESETS: dict[str, Method] = {
         panels_per_oscillation=1.0,
         min_panels=8,
         grading_ratio=4.0,
-        graded_frequency=1e-3,
+        graded_frequency=4e-3,
         edge_error_tolerance=1e-3,
         max_frequency_nodes=200_000,
         otf_wavelengths=0,
@@ -223,9 +223,9 @@ _PRESETS: dict[str, Method] = {
         frequency_samples=101,
         nodes_per_panel=7,
         panels_per_oscillation=1.0,
-        min_panels=8,
+        min_panels=4,
         grading_ratio=4.0,
-        graded_frequency=1e-3,
+        graded_frequency=4e-3,
         edge_error_tolerance=1e-3,
         max_frequency_nodes=200_000,
         otf_wavelengths=0,
@@ -243,7 +243,7 @@ _PRESETS["fast"] = _PRESETS["accurate"].replace(
     # otf_wavelengths 24, not 8: on 240 random systems (recipes/evidence/preset_error.py)
     # 8 bins cost up to 7.3e-3 NIIRS where RER >= 0.2 and 24 bins 7.1e-4, at 1.34x the
     # speed of accurate
-    name="fast", nodes_per_panel=4, min_panels=4, otf_wavelengths=24, turbulence_path_samples=16,
+    name="fast", nodes_per_panel=4, otf_wavelengths=24, turbulence_path_samples=16,
     edge_error_tolerance=1e-2
 )
 #: The presets by name: the one table of method numbers (read-only).
