@@ -291,6 +291,11 @@ class Labelled:
 
     @staticmethod
     def edge_nodes(cutoff, ifov_x, ifov_y, drift, m):
+        # a drift swept on dims of its own gets the rule of its largest value: finer than
+        # each needs, but one rule, so that the optics OTF is not evaluated per drift
+        own = [d for d in drift.dims if d not in {*cutoff.dims, *ifov_x.dims, *ifov_y.dims}]
+        if own:
+            drift = drift.max(own)
         return quadrature.edge_nodes(cutoff, ifov_x, ifov_y, drift, **m.edge_quadrature_knobs())
 
     def system_slices(self, nodes, atm, spectral_weights, integration_time, slant_range, m):

@@ -20,7 +20,8 @@ The timed part runs in one child process per checkout (``PYTHONPATH=PATH``, it p
 one repeat at a time, checkouts alternating (their order rotated each repeat), so that
 a load change on the shared machine falls on all. Each cell: one warm-up call, then
 ``--repeats`` (3) timed eager calls with ``.niirs.values`` read; the median per scenario
-is reported, every repeat kept. The load average is printed before every cell.
+is reported (wall time and the child's CPU time, which a busy shared machine disturbs
+less), every repeat kept. The load average is printed before every cell.
 
 Writes ``docs/benchmarks/bench_edge_cost.json`` (``--out``). Run from the repository
 root::
@@ -68,11 +69,11 @@ def _inputs(cell):
         f = xr.DataArray(np.linspace(2.0, 6.0, 20), dims="focal_length")
         return [(olson_sensor("nir", focal_length=f), xbsm.scenario(**base, ground_range=ranges))]
     if cell == "drift":
-        d = xr.DataArray(np.linspace(0.0, 500e-6, 20), dims="drift")
+        d = xr.DataArray(np.linspace(0.0, 500e-6, 20), dims="drift_step")
         return [(olson_sensor("nir", drift_rate_x=d),
                  xbsm.scenario(**base, ground_range=ranges))]
     if cell == "drift_alone":
-        d = xr.DataArray(np.linspace(0.0, 500e-6, 1000), dims="drift")
+        d = xr.DataArray(np.linspace(0.0, 500e-6, 1000), dims="drift_step")
         return [(olson_sensor("nir", drift_rate_x=d),
                  xbsm.scenario(**base, ground_range=20_250.0))]
     raise ValueError(cell)
@@ -93,13 +94,13 @@ def child():
                 xbsm.niirs(s, sc, method=request["method"]).niirs.values
             prepared[key] = pairs
         pairs = prepared[key]
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         count = 0
         for s, sc in pairs:
             out = xbsm.niirs(s, sc, method=request["method"])
             count += out.niirs.size // out.sizes["giqe"]
-        seconds = time.perf_counter() - start
-        print(json.dumps({"seconds": seconds, "scenarios": count}), flush=True)
+        seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
+        print(json.dumps({"seconds": seconds, "cpu": cpu, "scenarios": count}), flush=True)
 
 
 def main():
@@ -115,7 +116,8 @@ def main():
     checkouts = args.checkout or [str(ROOT), "/work/wt-start"]
     children = {}
     for path in checkouts:
-        env = {**os.environ, "PYTHONPATH": path, "OMP_NUM_THREADS": "1"}
+        env = {**os.environ, "PYTHONPATH": path, "OMP_NUM_THREADS": "1",
+               "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
         proc = subprocess.Popen([sys.executable, __file__, "--child"], cwd=path, env=env,
                                 stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         hello = json.loads(proc.stdout.readline())
@@ -130,6 +132,7 @@ def main():
         for method in METHODS:
             load = os.getloadavg()
             times = {path: [] for path in checkouts}
+            cpus = {path: [] for path in checkouts}
             scenarios = {}
             for r in range(args.repeats):
                 order = checkouts[r % len(checkouts):] + checkouts[:r % len(checkouts)]
@@ -139,18 +142,25 @@ def main():
                     proc.stdin.flush()
                     answer = json.loads(proc.stdout.readline())
                     times[path].append(answer["seconds"])
+                    cpus[path].append(answer["cpu"])
                     scenarios[path] = answer["scenarios"]
-            row = {path: {"seconds": times[path], "scenarios": scenarios[path],
+            row = {path: {"seconds": times[path], "cpu_seconds": cpus[path],
+                          "scenarios": scenarios[path],
                           "us_per_scenario": 1e6 * statistics.median(times[path])
+                          / scenarios[path],
+                          "cpu_us_per_scenario": 1e6 * statistics.median(cpus[path])
                           / scenarios[path]} for path in checkouts}
-            base = row[checkouts[-1]]["us_per_scenario"]
-            for path in checkouts:
-                row[path]["ratio_to_last"] = row[path]["us_per_scenario"] / base
+            for key in ("us_per_scenario", "cpu_us_per_scenario"):
+                base = row[checkouts[-1]][key]
+                for path in checkouts:
+                    row[path][key.replace("us_per_scenario", "ratio_to_last")] = (
+                        row[path][key] / base)
             record["cells"][f"{cell}/{method}"] = {"load": load, **row}
-            text = "  ".join(f"{Path(p).name}: {row[p]['us_per_scenario']:8.1f} us"
-                             for p in checkouts)
-            print(f"{cell:13s} {method:8s} load {load[0]:4.2f}  {text}  "
-                  f"ratio {row[checkouts[0]]['ratio_to_last']:.3f}", flush=True)
+            text = "  ".join(f"{Path(p).name}: {row[p]['us_per_scenario']:7.1f} us wall "
+                             f"{row[p]['cpu_us_per_scenario']:7.1f} us cpu" for p in checkouts)
+            print(f"{cell:13s} {method:8s} load {load[0]:4.2f}  {text}  ratio wall "
+                  f"{row[checkouts[0]]['ratio_to_last']:.3f} cpu "
+                  f"{row[checkouts[0]]['cpu_ratio_to_last']:.3f}", flush=True)
     record["load_end"] = os.getloadavg()
     print(f"load average at end: {record['load_end']}", flush=True)
     for proc in children.values():
