@@ -104,8 +104,8 @@ class Method:
     """gauss_kronrod: ratio of successive panels graded geometrically toward f = 0 from the
     first uniform panel."""
     graded_frequency: float
-    """gauss_kronrod: where the grading stops, in cycles per pixel (1e-3: a Gaussian blur
-    of RER 0.002 still spans a few graded panels)."""
+    """gauss_kronrod: where the grading stops, in cycles per pixel (4e-3: the last panel,
+    [0, 4e-3], spans under four 1/e widths of the OTF of a Gaussian blur of RER 0.002)."""
     edge_error_tolerance: float
     """gauss_kronrod: flag ``blur_unresolved`` where the rule's own error estimate
     (|Kronrod - Gauss| on each slice's RER and edge response, through the GIQE's

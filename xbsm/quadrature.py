@@ -16,7 +16,15 @@ edge [px] and :math:`f_c` the optics cutoff :math:`D/\lambda_{min}`
 - ``weights``: the quadrature weights [cycles/rad] on the same ``frequency``
   coordinate, with a non-dimension coordinate ``sine_frequency`` that holds
   the abscissa used in :math:`1/f` and :math:`\sin(2\pi f\theta x)`. It equals
-  ``frequency`` for every rule except ``"pybsm"``, which offsets it by 1e-6.
+  ``frequency`` for every rule except ``"pybsm"``, which offsets it by 1e-6. The
+  Gauss-Kronrod rule adds ``error_weights`` (Kronrod minus embedded Gauss weights):
+  the same OTF samples contracted with them give the rule's own error estimate.
+
+The ``"accurate"`` and ``"fast"`` presets use the Gauss-Kronrod rule on panels that
+follow the system OTF from sensor quantities alone (uniform panels for the sine's
+oscillation, at least one per lobe of the drift sinc, the first graded geometrically
+toward f = 0 for any narrow blur; :func:`kronrod_sensors`), so that every scenario of a
+sweep shares one rule.
 
 :func:`xbsm.metrics.edge_response` consumes the pair. The rules take plain
 knobs; their values for the ``"pybsm"``, ``"accurate"`` and ``"fast"`` methods live
@@ -48,6 +56,7 @@ __all__ = [
     "edge_quadrature",
     "gauss_legendre_rule",
     "kronrod_nodes",
+    "kronrod_sensors",
     "pybsm_slice_count",
     "samples_per_oscillation",
     "uniform_trapezoid_rule",
@@ -450,7 +459,7 @@ def _panel_edges(cutoff, n_panels, breakpoints):
 
 def edge_quadrature(*, cutoff, ifov, rule, grid_size, nodes_per_panel, panels_per_oscillation,
                     min_panels, breakpoints=None, frequency_offset=1e-6, name="custom",
-                    max_nodes=None, grading_ratio=4.0, graded_frequency=1e-3, drift=0.0):
+                    max_nodes=None, grading_ratio=4.0, graded_frequency=4e-3, drift=0.0):
     r"""Frequency nodes and weights of an edge-response quadrature rule.
 
     Parameters
@@ -878,10 +887,12 @@ def band_cutoff_arrays(aperture_diameter, wavelength, qe, transmission, waveleng
     return {"cutoff_frequency": np.where(np.isnan(cutoff), fallback, cutoff)}
 
 
-#: Below this RER the edge-response quadrature is not converged (tested on the worse of the
-#: x and y slices, where a one-axis smear shows first): over 240 random systems
-#: (recipes/evidence/preset_error.py) accurate is within 6.2e-4 NIIRS where RER >= 0.05
-#: (1e-5 where RER >= 0.15) and off by up to 3.6 below (flag ``blur_unresolved``).
+#: For rules without an error estimate (pybsm's trapezoid, edge_rule="gauss_legendre"):
+#: below this RER the edge-response quadrature is not converged (tested on the worse of
+#: the x and y slices, where a one-axis smear shows first): over 240 random systems
+#: (recipes/evidence/preset_error.py) the uniform-panel Gauss-Legendre rule was within
+#: 6.2e-4 NIIRS where RER >= 0.05 (1e-5 where RER >= 0.15) and off by up to 3.6 below
+#: (flag ``blur_unresolved``). The Gauss-Kronrod rule flags by its own estimate instead.
 UNRESOLVED_RER = 0.05
 
 
