@@ -23,7 +23,7 @@ edge [px] and :math:`f_c` the optics cutoff :math:`D/\lambda_{min}`
 The ``"accurate"`` and ``"fast"`` presets use the Gauss-Kronrod rule on panels that
 follow the system OTF from sensor quantities alone (uniform panels for the sine's
 oscillation, at least one per lobe of the drift sinc, the first graded geometrically
-toward f = 0 for any narrow blur; :func:`kronrod_sensors`), so that every scenario of a
+toward f = 0 for any narrow blur; ``_kronrod_sensors``), so that every scenario of a
 sweep shares one rule.
 
 :func:`xbsm.metrics.edge_response` consumes the pair. The rules take plain
@@ -56,7 +56,6 @@ __all__ = [
     "edge_quadrature",
     "gauss_legendre_rule",
     "kronrod_nodes",
-    "kronrod_sensors",
     "pybsm_slice_count",
     "samples_per_oscillation",
     "uniform_trapezoid_rule",
@@ -298,7 +297,7 @@ def _kronrod_panels(edges, n):
 
 def _kronrod_counts(c, ifov, drift, *, nodes_per_panel, panels_per_oscillation, min_panels,
                     grading_ratio, graded_frequency, max_nodes):
-    """Uniform panels and graded panels of every sensor (integer arrays, :func:`kronrod_sensors`)."""
+    """Uniform panels and graded panels of every sensor (integer arrays, ``_kronrod_sensors``)."""
     per_panel = 2 * int(nodes_per_panel) + 1
     n_osc = c * ifov * MAX_POSITION
     base = np.maximum(min_panels, np.ceil(panels_per_oscillation * n_osc)).astype(np.int64)
@@ -317,9 +316,9 @@ def _kronrod_counts(c, ifov, drift, *, nodes_per_panel, panels_per_oscillation, 
     return base, uniform, graded, per_panel
 
 
-def kronrod_sensors(c, ifov, drift, *, nodes_per_panel, panels_per_oscillation, min_panels,
+def _kronrod_sensors(c, ifov, drift, *, nodes_per_panel, panels_per_oscillation, min_panels,
                     grading_ratio, graded_frequency, max_nodes=None, **_):
-    """Gauss-Kronrod edge rule of every sensor, all at once (numpy).
+    r"""Gauss-Kronrod edge rule of every sensor, all at once (numpy).
 
     Parameters
     ----------
@@ -335,8 +334,8 @@ def kronrod_sensors(c, ifov, drift, *, nodes_per_panel, panels_per_oscillation, 
 
     Notes
     -----
-    Panels over :math:`[0, f_c]`: :math:`m = \\max(m_{min}, \\lceil p\\,n_{osc}\\rceil,
-    \\lceil f_c a\\rceil)` uniform ones (the last term: one per lobe of a drift sinc of
+    Panels over :math:`[0, f_c]`: :math:`m = \max(m_{min}, \lceil p\,n_{osc}\rceil,
+    \lceil f_c a\rceil)` uniform ones (the last term: one per lobe of a drift sinc of
     angle a), the first of them split geometrically (ratio ``grading_ratio``) down to
     ``graded_frequency`` cycles per pixel, so that an OTF living in a small part of the
     passband (jitter, turbulence, defocus: any smooth blur) meets panels of its own scale.
@@ -360,7 +359,7 @@ def kronrod_sensors(c, ifov, drift, *, nodes_per_panel, panels_per_oscillation, 
     nodes = np.empty((size, flat_c.size))
     weights, error = np.zeros((size, flat_c.size)), np.zeros((size, flat_c.size))
     nodes[...] = flat_c  # padding
-    for count, steps in set(zip(uniform.tolist(), graded.tolist())):
+    for count, steps in set(zip(uniform.tolist(), graded.tolist(), strict=True)):
         which = np.flatnonzero((uniform == count) & (graded == steps))
         edges = _graded_edges(flat_c[which], count, steps, grading_ratio)
         head = (count + steps) * per_panel
@@ -371,8 +370,10 @@ def kronrod_sensors(c, ifov, drift, *, nodes_per_panel, panels_per_oscillation, 
 
 
 def _graded_edges(cutoffs, count, steps, ratio):
-    """Panel edges (edge, sensor): ``count`` uniform panels to each cutoff, the first split
-    geometrically into ``steps`` + 1 panels of ratio ``ratio`` toward 0."""
+    """Panel edges (edge, sensor): ``count`` uniform panels to each cutoff.
+
+    The first is split geometrically into ``steps`` + 1 panels of ratio ``ratio`` toward 0.
+    """
     h = cutoffs / count
     geometric = h * float(ratio) ** -np.arange(steps, 0, -1.0)[:, None]
     edges = np.concatenate([np.zeros((1, cutoffs.size)), geometric,
@@ -521,7 +522,7 @@ def edge_quadrature(*, cutoff, ifov, rule, grid_size, nodes_per_panel, panels_pe
     """
     cutoff, ifov_max = _checked(rule, cutoff, np.nanmax(np.asarray(ifov, dtype=float)))
     if rule == "gauss_kronrod":
-        nodes, weights, error = kronrod_sensors(
+        nodes, weights, error = _kronrod_sensors(
             np.asarray(cutoff), np.asarray(ifov_max), np.asarray(float(drift)),
             nodes_per_panel=nodes_per_panel, panels_per_oscillation=panels_per_oscillation,
             min_panels=min_panels, grading_ratio=grading_ratio,
@@ -720,7 +721,7 @@ def edge_rule_arrays(cutoff, ifov_x, ifov_y, drift=0.0, **knobs):
     rule = knobs.pop("rule")
     c, ifov = np.asarray(cutoff), np.maximum(ifov_x, ifov_y)
     if rule == "gauss_kronrod":
-        nodes, weights, error = kronrod_sensors(c, ifov, np.asarray(drift, dtype=float),
+        nodes, weights, error = _kronrod_sensors(c, ifov, np.asarray(drift, dtype=float),
                                                 **knobs)
         return nodes, weights, nodes.copy(), error
     knobs = {k: v for k, v in knobs.items() if k not in _KRONROD_KNOBS}

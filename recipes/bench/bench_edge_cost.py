@@ -91,7 +91,7 @@ def child():
         if key not in prepared:
             pairs = _inputs(request["cell"])
             for s, sc in pairs:  # warm-up
-                xbsm.niirs(s, sc, method=request["method"]).niirs.values
+                _ = xbsm.niirs(s, sc, method=request["method"]).niirs.values
             prepared[key] = pairs
         pairs = prepared[key]
         start, cpu = time.perf_counter(), time.process_time()

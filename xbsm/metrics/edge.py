@@ -384,7 +384,7 @@ def slice_terms_arrays(filtered, unfiltered, weights, abscissa, ifov, edge_otf: 
     OTFs on (..., frequency, orientation), weights and abscissae on (..., frequency), ifov
     on (..., orientation); orientations x, y in that order. With ``error_weights`` (on
     the weights' axes: a rule's embedded error estimate), also ``edge_error``: the NIIRS
-    error that estimate allows in any GIQE (:func:`niirs_error_bound_arrays`).
+    error that estimate allows in any GIQE (``_niirs_error_bound``).
     """
     def edge(system):
         system = np.abs(system) if edge_otf == "abs" else system
@@ -405,7 +405,7 @@ def slice_terms_arrays(filtered, unfiltered, weights, abscissa, ifov, edge_otf: 
            "rer_unfiltered_x": unfiltered_x, "rer_unfiltered_y": unfiltered_y}
     if error_weights is not None:
         d_rer, d_eho = errors
-        out["edge_error"] = niirs_error_bound_arrays(rer, eho, d_rer, d_eho, unfiltered,
+        out["edge_error"] = _niirs_error_bound(rer, eho, d_rer, d_eho, unfiltered,
                                                      unfiltered_errors[0])
     return out
 
@@ -424,7 +424,7 @@ def _quadpack(relative):
         return relative * np.minimum(1.0, (200.0 * relative) ** 1.5)
 
 
-def niirs_error_bound_arrays(rer, eho, d_rer, d_eho, rer_unfiltered, d_rer_unfiltered):
+def _niirs_error_bound(rer, eho, d_rer, d_eho, rer_unfiltered, d_rer_unfiltered):
     r"""Largest NIIRS change (GIQE 3, 4, 5) that edge-term errors of the x and y slices allow.
 
     Parameters
