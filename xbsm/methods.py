@@ -108,7 +108,7 @@ class Method:
     [0, 4e-3], spans under four 1/e widths of the OTF of a Gaussian blur of RER 0.002)."""
     edge_error_tolerance: float
     """gauss_kronrod: flag ``blur_unresolved`` where the rule's own error estimate
-    (|Kronrod - Gauss| on each slice's RER and edge response, through the GIQE's
+    (the Kronrod - Gauss difference of each slice's RER and edge response, through the GIQE's
     sensitivity) exceeds this many NIIRS."""
     max_frequency_nodes: int
     """gauss_legendre: most nodes a sensor's edge-response rule may need before the call is

@@ -616,8 +616,8 @@ def edge_nodes(cutoff, ifov_x, ifov_y, drift=0.0, **knobs):
     ifov_x, ifov_y : float or xr.DataArray
         Detector pitch over focal length. [rad]
     drift : float or xr.DataArray, optional
-        The larger drift angle over the nominal exposure, |drift rate| x integration
-        time x TDI stages (Gauss-Kronrod: one panel per lobe of its sinc). [rad]
+        The larger drift angle over the nominal exposure, the drift rate's magnitude x
+        integration time x TDI stages (Gauss-Kronrod: one panel per lobe of its sinc). [rad]
     **knobs
         The rule's knobs, as for :func:`edge_quadrature`
         (``Method.edge_quadrature_knobs()``).

@@ -119,7 +119,8 @@ def _edge_terms_error_kernel(otf, weights, error_weights, abscissa, ifov):
     One sine (and cosine) table at the RER and EHO positions, contracted with the OTF
     times the weights and times the error weights (Kronrod minus embedded Gauss): the
     second contraction is the difference of the two rules' edge responses. Returns
-    RER, EHO, |dRER| and the largest |dER| over the EHO positions.
+    RER, EHO, the absolute RER difference and the largest absolute edge-response difference
+    over the EHO positions.
     """
     positions = np.concatenate([RER_POSITIONS, EHO_POSITIONS])
     with np.errstate(all="ignore"):  # IEEE results without warnings, as xarray's arithmetic
