@@ -104,6 +104,7 @@ EXPECTED_UNITS = MappingProxyType({
     "stacked_snr": "1",
     # quadrature
     "nodes": "cycles/rad", "weights": "cycles/rad", "sine_frequency": "cycles/rad",
+    "error_weights": "cycles/rad", "edge_error": "1",
     "cutoff_wavelength": "m", "optics_cutoff": "cycles/rad", "band_cutoff": "cycles/rad",
     "rer_unfiltered_x": "1", "rer_unfiltered_y": "1",
     "samples_per_oscillation": "1",

@@ -71,40 +71,69 @@ def test_decode_of_every_flag_variable_of_a_niirs_result():
 
 
 def test_a_one_axis_drift_with_a_negative_slice_is_nan_flagged_and_silent():
-    # issue 23: the `fast` rule on a one-axis drift of 170-180 pixels (Olson NIR, IFOV
-    # 2 urad, 30 ms) gives rer_x slightly below zero. Every GIQE is undefined there:
-    # NaN with rer_nonpositive ("either slice", docs/flags.md), both appliers, and no
-    # numpy RuntimeWarning reaching the user.
+    # issue 23: the uniform-panel Gauss-Legendre rule of the old `fast` preset on a one-axis
+    # drift of 170-180 pixels (Olson NIR, IFOV 2 urad, 30 ms) gives rer_x slightly below
+    # zero. Every GIQE is undefined there: NaN with rer_nonpositive ("either slice",
+    # docs/flags.md), both appliers, and no numpy RuntimeWarning reaching the user.
     from xbsm.examples import olson_scenario, olson_sensor
+    old_fast = xbsm.method("fast", edge_rule="gauss_legendre", nodes_per_panel=6)
     pixels = xr.DataArray(np.arange(170.0, 180.0), dims="drift_pixels")
     sensor = olson_sensor("nir", drift_rate_x=pixels * 2e-6 / 0.03)
     scenario = olson_scenario(ground_range=0.0).isel(visibility=0)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        swept = xbsm.niirs(sensor, scenario, method="fast")
+        swept = xbsm.niirs(sensor, scenario, method=old_fast)
         negative = swept.rer_x < 0
         assert negative.any()  # the case the test is about
         single = xbsm.niirs(sensor.isel(drift_pixels=int(np.argmax(negative.values))), scenario,
-                            method="fast")
+                            method=old_fast)
+        # the Kronrod rule of today's presets resolves the drift: positive, unflagged
+        fast = xbsm.niirs(sensor, scenario, method="fast")
     for out in (swept.where(negative, drop=True), single):
         assert np.isnan(out.niirs).all()
         assert np.isnan(out.rer).all()
         assert (out.flags.astype(np.int64) & flags.flag("rer_nonpositive")).all()
+    assert (fast.rer_x > 0).all()
+    assert not (fast.flags & flags.flag("rer_nonpositive")).any()
 
 
 def test_a_one_axis_smear_is_flagged_unresolved_on_its_own_slice():
-    # issue 23: Olson NIR with a drift of 109 pixels along x (IFOV 2 urad, 30 ms).
-    # `accurate` gives rer_x 0.0136 where a linear smear of L pixels has RER about 1/L =
-    # 0.0092 (the issue's dense trapezoid and scipy quad agree on 0.0091), yet the
-    # geometric mean 0.069 is above the threshold: the flag looks at the worse slice.
+    # issue 23: Olson NIR with a drift of 109 pixels along x (IFOV 2 urad, 30 ms; the well
+    # fill shortens the exposure to 20.4 ms here: 74 px). The old uniform-panel rule gives
+    # a wrong rer_x with the geometric mean above its threshold: the flag looks at the
+    # worse slice. The Kronrod rule of `accurate` resolves it: within 1e-9 of a dense
+    # trapezoid on the same system OTF, and unflagged.
     from xbsm.examples import olson_scenario, olson_sensor
     from xbsm.quadrature import UNRESOLVED_RER
 
     sensor = olson_sensor("nir", drift_rate_x=109 * 2e-6 / 0.03)
-    out = xbsm.niirs(sensor, olson_scenario(ground_range=0.0).isel(visibility=0),
-                     method="accurate")
-    assert float(out.rer) > UNRESOLVED_RER > float(out.rer_x)  # the case the test is about
-    assert (out.flags & flags.flag("blur_unresolved")).all()
+    scenario = olson_scenario(ground_range=0.0).isel(visibility=0)
+    old = xbsm.niirs(sensor, scenario, method=xbsm.method("accurate", edge_rule="gauss_legendre",
+                                                          nodes_per_panel=10))
+    assert float(old.rer) > UNRESOLVED_RER > float(old.rer_x)  # the case the test is about
+    assert (old.flags & flags.flag("blur_unresolved")).all()
+    out = xbsm.niirs(sensor, scenario, method="accurate")
+    reference = _dense_rer(sensor, scenario, "accurate")
+    assert abs(float(out.rer_x) - reference[0]) < 1e-9
+    assert abs(float(old.rer_x) / reference[0] - 1) > 5e-4  # the old rule: 1e-3 relative
+    assert not (out.flags & flags.flag("blur_unresolved")).any()
     # a symmetric, well-resolved system stays unflagged
     plain = xbsm.niirs(olson_sensor("nir"), olson_scenario(ground_range=0.0).isel(visibility=0))
     assert not (plain.flags & flags.flag("blur_unresolved")).any()
+
+
+def _dense_rer(sensor, scenario, method, samples=2**16):
+    """RER of the x and y slices by the trapezoid rule on 2^16 and 2^15 uniform steps over
+    [0, D / lambda_min] of the system OTF (xbsm.system_otf), Richardson-extrapolated: a
+    reference independent of xbsm.quadrature. RER = (2/pi) int H(f) sin(pi f ifov) / f df."""
+    cutoff = float(xbsm.niirs(sensor, scenario, method=method).cutoff_frequency)
+    f = np.linspace(0.0, cutoff, samples + 1)
+    otf = xbsm.system_otf(sensor, scenario, frequency=f, method=method)
+    h = otf.system_unfiltered.transpose("orientation", "frequency").values.real
+    ifov = np.array([float(sensor.pixel_pitch_x / sensor.focal_length),
+                     float(sensor.pixel_pitch_y / sensor.focal_length)])[:, None]
+    kernel = np.full((2, f.size), np.pi * ifov)  # sin(pi f ifov) / f -> pi ifov at f = 0
+    kernel[:, 1:] = np.sin(np.pi * f[1:] * ifov) / f[1:]
+    fine, coarse = (np.trapezoid(h[:, ::k] * kernel[:, ::k], f[::k], axis=-1) * 2 / np.pi
+                    for k in (1, 2))
+    return fine + (fine - coarse) / 3

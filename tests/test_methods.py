@@ -80,8 +80,8 @@ def test_unknown_preset_raises_naming_the_choices():
 def test_fast_differs_from_accurate_only_in_its_documented_knobs():
     fast, accurate = PRESETS["fast"], PRESETS["accurate"]
     changed = {k for k in Method.knobs() if getattr(fast, k) != getattr(accurate, k)}
-    assert changed == {"name", "nodes_per_panel", "min_panels", "otf_wavelengths",
-                       "turbulence_path_samples"}
+    assert changed == {"name", "nodes_per_panel", "otf_wavelengths",
+                       "turbulence_path_samples", "edge_error_tolerance"}
 
 
 # --- pyBSM's NIIRS on a 1601-point grid ---------------------------------------------

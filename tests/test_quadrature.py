@@ -144,28 +144,70 @@ def test_gauss_legendre_is_exact_for_polynomials_and_avoids_zero():
 
 def test_panel_count_follows_oscillation_count():
     # Q = 0.05: cutoff * ifov = 20, x_max = 3 px -> 60 oscillations -> 60 panels
-    nodes, _ = quadrature.edge_quadrature(cutoff=20 / IFOV, ifov=IFOV, **knobs("accurate"))
-    assert nodes.sizes["frequency"] == 60 * xbsm.method("accurate").nodes_per_panel
+    gl = knobs("accurate", edge_rule="gauss_legendre", nodes_per_panel=10)
+    nodes, _ = quadrature.edge_quadrature(cutoff=20 / IFOV, ifov=IFOV, **gl)
+    assert nodes.sizes["frequency"] == 60 * 10
     # well sampled: min_panels wins
-    nodes, _ = quadrature.edge_quadrature(cutoff=0.5 / IFOV, ifov=IFOV, **knobs("accurate"))
+    nodes, _ = quadrature.edge_quadrature(cutoff=0.5 / IFOV, ifov=IFOV, **gl)
     assert nodes.sizes["frequency"] == xbsm.method("accurate").min_panels * 10
+
+
+def test_kronrod_panels_are_uniform_then_graded_then_one_per_drift_lobe():
+    m = xbsm.method("accurate")
+    per_panel = 2 * m.nodes_per_panel + 1  # Kronrod
+    # Q = 0.05: 60 uniform panels of 1/3 cycle/px; the first split by 4 down to the
+    # graded frequency: ceil(log(1/3 / g) / log 4) more panels
+    steps = int(np.ceil(np.log(1 / 3 / m.graded_frequency) / np.log(m.grading_ratio)))
+    nodes, w = quadrature.edge_quadrature(cutoff=20 / IFOV, ifov=IFOV, **knobs("accurate"))
+    assert nodes.sizes["frequency"] == (60 + steps) * per_panel
+    assert float(w.sum()) == pytest.approx(20 / IFOV, rel=1e-14)
+    assert nodes.values.min() < m.graded_frequency / IFOV / m.grading_ratio
+    # a drift of 500 px over the exposure: one panel per sinc lobe, 500 * 0.5 = 250 lobes
+    # below a cutoff of 0.5 cycle/px; the first panel, 2e-3 cycle/px, is graded no further
+    # with graded_frequency=2e-3
+    drift = 500 * IFOV
+    nodes, w = quadrature.edge_quadrature(cutoff=0.5 / IFOV, ifov=IFOV, drift=drift,
+                                          **knobs("accurate", graded_frequency=2e-3))
+    assert nodes.sizes["frequency"] == 250 * per_panel
+    # the rule integrates the sinc's own closed form: int_0^c sinc(a f) df = Si(pi a c)/(pi a)
+    from scipy.special import sici
+    exact = sici(np.pi * drift * 0.5 / IFOV)[0] / (np.pi * drift)
+    assert float((w * np.sinc(drift * nodes)).sum()) == pytest.approx(exact, rel=1e-12)
+
+
+def test_kronrod_nodes_match_quadpack_and_integrate_to_their_degree():
+    # QUADPACK qk15 (Piessens et al. 1983): the largest Kronrod node and its weight
+    t, vk, vg = quadrature.kronrod_nodes(7)
+    assert t[-1] == pytest.approx(0.991455371120812639206854697526329, abs=1e-15)
+    assert vk[-1] == pytest.approx(0.022935322010529224963732008058970, abs=1e-15)
+    assert vg[7] == pytest.approx(0.417959183673469387755102040816327, abs=1e-15)  # G7 centre
+    for n in (3, 4, 7):
+        t, vk, vg = quadrature.kronrod_nodes(n)
+        for k in range(3 * n + 2):
+            exact = 2.0 / (k + 1) if k % 2 == 0 else 0.0
+            assert float((vk * t**k).sum()) == pytest.approx(exact, abs=1e-14)
+        for k in range(2 * n):
+            exact = 2.0 / (k + 1) if k % 2 == 0 else 0.0
+            assert float((vg * t**k).sum()) == pytest.approx(exact, abs=1e-14)
 
 
 def test_breakpoints_become_panel_edges():
     bps = [0.123, 0.777, 5.0]  # the last is beyond the cutoff and ignored
     nodes, w = quadrature.edge_quadrature(
-        cutoff=1.0, ifov=0.1, breakpoints=bps, **knobs("accurate", min_panels=2, nodes_per_panel=3)
-    )
+        cutoff=1.0, ifov=0.1, breakpoints=bps,
+        **knobs("accurate", edge_rule="gauss_legendre", min_panels=2, nodes_per_panel=3))
     # panels [0,.123], [.123,.5], [.5,.777], [.777,1]
     assert nodes.sizes["frequency"] == 12
     assert float(w.sum()) == pytest.approx(1.0, rel=1e-14)
 
 
 def test_knobs_override_one_by_one():
-    a, _ = quadrature.edge_quadrature(cutoff=1.0, ifov=1.0, **knobs("fast", nodes_per_panel=3))
+    gl = dict(edge_rule="gauss_legendre")
+    a, _ = quadrature.edge_quadrature(cutoff=1.0, ifov=1.0,
+                                      **knobs("fast", nodes_per_panel=3, **gl))
     assert a.sizes["frequency"] == xbsm.method("fast").min_panels * 3
     b, _ = quadrature.edge_quadrature(
-        cutoff=1.0, ifov=0.1, **knobs("accurate", min_panels=2, nodes_per_panel=2))
+        cutoff=1.0, ifov=0.1, **knobs("accurate", min_panels=2, nodes_per_panel=2, **gl))
     assert b.sizes["frequency"] == 4
 
 

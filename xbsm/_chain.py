@@ -111,7 +111,12 @@ def _niirs_chain(ap, m, calibration) -> dict:
 def _edge_chain(ap, r, atm, cutoff, view, m) -> dict:
     """RER and EHO of the system OTF on the x and y slices, at the method's quadrature nodes."""
     ifov_x, ifov_y = view["ifov_x"], view["ifov_y"]
-    nodes, weights = ap.edge_nodes(cutoff, ifov_x, ifov_y, m)
+    s = ap.sensor
+    # the drift angle over the nominal exposure (a sensor quantity, so that a sweep over
+    # scenarios shares one rule): the well-fill limit only shortens it, widening the lobes
+    drift = (np.maximum(abs(s["drift_rate_x"]), abs(s["drift_rate_y"]))
+             * s["integration_time"] * s["tdi_stages"])
+    nodes, weights = ap.edge_nodes(cutoff, ifov_x, ifov_y, drift, m)
     otf = ap.system_slices(nodes, atm, r["spectral_weights"], r["effective_integration_time"],
                            view["slant_range"], m)
     ifov = ap.orientations(ifov_x, ifov_y)
@@ -121,10 +126,15 @@ def _edge_chain(ap, r, atm, cutoff, view, m) -> dict:
     if m.edge_rule == "uniform_trapezoid":
         coarse = ap.undersampled(nodes, cutoff, ifov_x, ifov_y, m.undersampling_threshold)
     flags = ap.flag(ap.no_flags(), "undersampled_grid", coarse)
-    # on the worse slice: a one-axis smear leaves the geometric mean above the threshold
-    # while its own slice is not resolved (issue 23)
-    worse = np.minimum(terms["rer_x"], terms["rer_y"])
-    flags = ap.flag(flags, "blur_unresolved", worse < quadrature.UNRESOLVED_RER)
+    if "edge_error" in terms:
+        # the rule's own estimate, both slices through the GIQE's sensitivity (issue 23)
+        unresolved = terms["edge_error"] > m.edge_error_tolerance
+        terms = {name: terms[name] for name in terms if name != "edge_error"}
+    else:
+        # on the worse slice: a one-axis smear leaves the geometric mean above the
+        # threshold while its own slice is not resolved
+        unresolved = np.minimum(terms["rer_x"], terms["rer_y"]) < quadrature.UNRESOLVED_RER
+    flags = ap.flag(flags, "blur_unresolved", unresolved)
     return {**terms, "coherence_diameter": otf["coherence_diameter"],
             "cutoff_frequency": cutoff, "ifov": ifov, "flags": flags}
 
@@ -289,8 +299,13 @@ class Labelled:
             s["focal_length"], elevation=m.elevation, form=m.geometry)
 
     @staticmethod
-    def edge_nodes(cutoff, ifov_x, ifov_y, m):
-        return quadrature.edge_nodes(cutoff, ifov_x, ifov_y, **m.edge_quadrature_knobs())
+    def edge_nodes(cutoff, ifov_x, ifov_y, drift, m):
+        # a drift swept on dims of its own gets the rule of its largest value: finer than
+        # each needs, but one rule, so that the optics OTF is not evaluated per drift
+        own = [d for d in drift.dims if d not in {*cutoff.dims, *ifov_x.dims, *ifov_y.dims}]
+        if own:
+            drift = drift.max(own)
+        return quadrature.edge_nodes(cutoff, ifov_x, ifov_y, drift, **m.edge_quadrature_knobs())
 
     def system_slices(self, nodes, atm, spectral_weights, integration_time, slant_range, m):
         # the weights carry their wavelengths; ``atm`` is for the direct applier's arrays
@@ -389,10 +404,10 @@ class Direct:
                                        elevation=m.elevation, form=m.geometry)
 
     @staticmethod
-    def edge_nodes(cutoff, ifov_x, ifov_y, m):
-        nodes, weights, sine = quadrature.edge_rule_arrays(cutoff, ifov_x, ifov_y,
-                                                           **m.edge_quadrature_knobs())
-        return nodes, (weights, sine)
+    def edge_nodes(cutoff, ifov_x, ifov_y, drift, m):
+        nodes, weights, sine, error = quadrature.edge_rule_arrays(
+            cutoff, ifov_x, ifov_y, drift, **m.edge_quadrature_knobs())
+        return nodes, (weights, sine, error)
 
     def system_slices(self, nodes, atm, spectral_weights, integration_time, slant_range, m):
         unfiltered, filtered, r0 = system.system_slice_arrays(
@@ -406,7 +421,9 @@ class Direct:
 
     @staticmethod
     def slice_terms(filtered, unfiltered, ifov, weights, edge_otf):
-        return edge_.slice_terms_arrays(filtered, unfiltered, *weights, ifov, edge_otf)
+        weights, sine, error = weights
+        return edge_.slice_terms_arrays(filtered, unfiltered, weights, sine, ifov, edge_otf,
+                                        error_weights=error)
 
     @staticmethod
     def undersampled(nodes, cutoff, ifov_x, ifov_y, threshold):

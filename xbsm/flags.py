@@ -76,10 +76,10 @@ FLAGS = MappingProxyType({
     ),
     "blur_unresolved": (
         4096,
-        "system blurred over many pixels (RER of the worse slice below 0.05): the "
-        "edge-response quadrature spreads its nodes to the optics cutoff and does not "
-        "resolve the narrow OTF; the result may be wrong (measured up to 3.6 NIIRS for "
-        "accurate)",
+        "the edge-response quadrature does not resolve the system OTF: its own error "
+        "estimate (Kronrod minus Gauss on both slices, through the GIQE's sensitivity) "
+        "allows more NIIRS error than the method's edge_error_tolerance (rules without an "
+        "estimate: RER of the worse slice below 0.05); the result may be wrong",
     ),
     "partial_spectral_coverage": (
         8192,

@@ -23,7 +23,7 @@ from .params import Choice, Instance, Spec, unknown_keyword
 KNOB_CHOICES = MappingProxyType({
     "atmosphere_interpolation": INTERPOLATIONS,
     "band_edges": ("exact", "interpolated"),
-    "edge_rule": ("uniform_trapezoid", "gauss_legendre"),
+    "edge_rule": ("uniform_trapezoid", "gauss_legendre", "gauss_kronrod"),
     "edge_otf": ("abs", "real"),
     "filter_otf": ("pybsm", "dtft"),
     "turbulence_path_rule": ("trapezoid", "gauss-legendre"),
@@ -47,6 +47,9 @@ KNOB_REALS = MappingProxyType({
     "panels_per_oscillation": (0.0, 64.0, False),
     "giqe4_noise_coefficient": (0.0, 1.0, True),
     "undersampling_threshold": (0.0, 100.0, True),
+    "grading_ratio": (1.0, 64.0, False),
+    "graded_frequency": (0.0, 1.0, False),
+    "edge_error_tolerance": (0.0, 10.0, False),
 })
 
 
@@ -84,17 +87,30 @@ class Method:
     edge_rule: str
     """Edge-response quadrature over frequency: "uniform_trapezoid" (pyBSM: trapezoid on
     the slice of its square grid, with a 1e-6 cycles/rad offset in 1/f and the sine) or
-    "gauss_legendre" (composite Gauss-Legendre resolving every oscillation of the
-    integrand; see xbsm.quadrature)."""
+    "gauss_legendre" (composite Gauss-Legendre on uniform panels resolving every oscillation
+    of the integrand) or "gauss_kronrod" (composite Gauss-Kronrod on those panels, graded
+    toward f = 0 and one per lobe of the sensor's drift sinc, with the Kronrod - Gauss
+    difference as its error estimate; see xbsm.quadrature)."""
     frequency_samples: int
     """uniform_trapezoid: points N of pyBSM's grid linspace(-1, 1, N) * D / lambda_min
     (pyBSM: 101, which leaves 50 samples from 0 to the cutoff)."""
     nodes_per_panel: int
-    """gauss_legendre: nodes per panel."""
+    """gauss_legendre: nodes per panel; gauss_kronrod: nodes n of the embedded Gauss rule
+    (the Kronrod rule has 2n + 1)."""
     panels_per_oscillation: float
     """gauss_legendre: panels per period of sin(2 pi f ifov x) at x = 3 px."""
     min_panels: int
-    """gauss_legendre: fewest panels over [0, D / lambda_min]."""
+    """gauss_legendre, gauss_kronrod: fewest uniform panels over [0, D / lambda_min]."""
+    grading_ratio: float
+    """gauss_kronrod: ratio of successive panels graded geometrically toward f = 0 from the
+    first uniform panel."""
+    graded_frequency: float
+    """gauss_kronrod: where the grading stops, in cycles per pixel (4e-3: the last panel,
+    [0, 4e-3], spans under four 1/e widths of the OTF of a Gaussian blur of RER 0.002)."""
+    edge_error_tolerance: float
+    """gauss_kronrod: flag ``blur_unresolved`` where the rule's own error estimate
+    (the Kronrod - Gauss difference of each slice's RER and edge response, through the GIQE's
+    sensitivity) exceeds this many NIIRS."""
     max_frequency_nodes: int
     """gauss_legendre: most nodes a sensor's edge-response rule may need before the call is
     refused (a pitch of 1 m instead of 1 um asks for millions and gigabytes); 200,000 is
@@ -158,7 +174,8 @@ class Method:
                     nodes_per_panel=self.nodes_per_panel,
                     panels_per_oscillation=self.panels_per_oscillation,
                     min_panels=self.min_panels, name=self.name,
-                    max_nodes=self.max_frequency_nodes)
+                    max_nodes=self.max_frequency_nodes, grading_ratio=self.grading_ratio,
+                    graded_frequency=self.graded_frequency)
 
     def replace(self, **knobs) -> Method:
         """A copy with some knobs changed."""
@@ -185,6 +202,9 @@ _PRESETS: dict[str, Method] = {
         nodes_per_panel=10,
         panels_per_oscillation=1.0,
         min_panels=8,
+        grading_ratio=4.0,
+        graded_frequency=4e-3,
+        edge_error_tolerance=1e-3,
         max_frequency_nodes=200_000,
         otf_wavelengths=0,
         edge_otf="abs",
@@ -207,11 +227,14 @@ _PRESETS: dict[str, Method] = {
         # (recipes/evidence/atmosphere_leave_one_out.py)
         atmosphere_interpolation="extinction-profile",
         band_edges="interpolated",
-        edge_rule="gauss_legendre",
+        edge_rule="gauss_kronrod",
         frequency_samples=101,
-        nodes_per_panel=10,
+        nodes_per_panel=5,
         panels_per_oscillation=1.0,
-        min_panels=8,
+        min_panels=4,
+        grading_ratio=4.0,
+        graded_frequency=4e-3,
+        edge_error_tolerance=1e-3,
         max_frequency_nodes=200_000,
         otf_wavelengths=0,
         edge_otf="real",
@@ -229,7 +252,8 @@ _PRESETS["fast"] = _PRESETS["accurate"].replace(
     # otf_wavelengths 24, not 8: on 240 random systems (recipes/evidence/preset_error.py)
     # 8 bins cost up to 7.3e-3 NIIRS where RER >= 0.2 and 24 bins 7.1e-4, at 1.34x the
     # speed of accurate
-    name="fast", nodes_per_panel=6, min_panels=4, otf_wavelengths=24, turbulence_path_samples=16
+    name="fast", nodes_per_panel=4, otf_wavelengths=24, turbulence_path_samples=16,
+    edge_error_tolerance=1e-2
 )
 #: The presets by name: the one table of method numbers (read-only).
 PRESETS = MappingProxyType(_PRESETS)

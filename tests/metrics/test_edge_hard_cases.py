@@ -1,0 +1,178 @@
+"""The edge response where the old uniform panels failed (issue 23), against references
+none of the package's quadrature computes: a dense uniform trapezoid with Richardson
+extrapolation on the system OTF (``xbsm.system_otf``), and closed forms (a linear smear of
+L px has RER = 1/L; a Gaussian blur of sigma px has RER = erf(1 / (2 sqrt(2) sigma))).
+
+The flag ``blur_unresolved`` must be set where a method fails and absent where it is fine.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+import xarray as xr
+from scipy.special import erf
+
+import xbsm
+from xbsm import quadrature
+from xbsm.examples import olson_sensor
+from xbsm.flags import has_flag
+from xbsm.metrics import edge
+
+IFOV = 2e-6  # Olson NIR: 8 um / 4 m [rad]
+SCENARIO = dict(altitude=9000.0, ground_range=20e3, visibility=23.0, platform_speed=100.0)
+
+
+def dense_rer(sensor, scenario, method, samples=2**16):
+    """RER of the x and y slices: trapezoid on 2^16 and 2^15 uniform steps over
+    [0, D / lambda_min] of the system OTF, Richardson-extrapolated.
+    RER = (2 / pi) int_0^fc H(f) sin(pi f ifov) / f df (IBSM Eq. 3-61, 3-63)."""
+    cutoff = float(xbsm.niirs(sensor, scenario, method=method).cutoff_frequency)
+    f = np.linspace(0.0, cutoff, samples + 1)
+    otf = xbsm.system_otf(sensor, scenario, frequency=f, method=method)
+    h = otf.system_unfiltered.transpose("orientation", "frequency").values.real
+    ifov = np.array([float(sensor.pixel_pitch_x / sensor.focal_length),
+                     float(sensor.pixel_pitch_y / sensor.focal_length)])[:, None]
+    kernel = np.empty((2, f.size))
+    kernel[:, 0] = np.pi * ifov[:, 0]  # the limit of sin(pi f ifov) / f at f = 0
+    kernel[:, 1:] = np.sin(np.pi * f[1:] * ifov) / f[1:]
+    fine, coarse = (np.trapezoid(h[:, ::k] * kernel[:, ::k], f[::k], axis=-1) * 2 / np.pi
+                    for k in (1, 2))
+    return fine + (fine - coarse) / 3
+
+
+def niirs_quiet(sensor, scenario, method):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no RuntimeWarning reaches the user
+        return xbsm.niirs(sensor, scenario, method=method)
+
+
+def unresolved(out):
+    return bool(has_flag(out.flags, "blur_unresolved").any())
+
+
+@pytest.mark.parametrize("pixels", [10.0, 109.0, 1000.0])
+@pytest.mark.parametrize("method, rel", [("accurate", 1e-7), ("fast", 1e-6)])
+def test_one_axis_drift_matches_the_dense_reference_unflagged(pixels, method, rel):
+    # Measured (recipes/evidence/edge_rule_comparison.py): accurate within 2e-8 relative,
+    # fast within 5e-7 (its reference is its own 24-bin OTF); the old uniform panels
+    # were off by up to 30 % at 1000 px (rer_x 0.00125 for 0.00183).
+    sensor = olson_sensor("nir", drift_rate_x=pixels * IFOV / 0.03, drift_rate_y=0.0)
+    scenario = xbsm.scenario(**SCENARIO)
+    out = niirs_quiet(sensor, scenario, method)
+    reference = dense_rer(sensor, scenario, method)
+    got = np.array([float(out.rer_x), float(out.rer_y)])
+    np.testing.assert_allclose(got, reference, rtol=rel)
+    assert not unresolved(out)
+
+
+def test_long_one_axis_drift_gives_the_closed_form_one_over_length():
+    # a linear smear of L px convolved with a PSF P: in the middle of the ramp the edge
+    # response rises at (1/L) x (the mass of P within L/2 of the point), so RER = 1/L up
+    # to P's mass beyond L/2 px: the diffraction line spread falls as 1/x^2, its tail mass
+    # beyond 300 px is about 1e-3 here. L from the exposure the well-fill limit leaves.
+    sensor = olson_sensor("nir", drift_rate_x=1000 * IFOV / 0.03, drift_rate_y=0.0)
+    scenario = xbsm.scenario(**SCENARIO)
+    out = niirs_quiet(sensor, scenario, "accurate")
+    length = 1000 * IFOV / 0.03 * float(out.effective_integration_time) / IFOV
+    assert float(out.rer_x) * length == pytest.approx(1.0, abs=2e-3)
+    # twice as long a smear halves the tail's share
+    longer = olson_sensor("nir", drift_rate_x=2000 * IFOV / 0.03, drift_rate_y=0.0)
+    out2 = niirs_quiet(longer, scenario, "accurate")
+    deficit = 1 - float(out.rer_x) * length, 1 - float(out2.rer_x) * 2 * length
+    assert deficit[1] == pytest.approx(deficit[0] / 2, rel=0.1)
+
+
+@pytest.mark.parametrize("sigma", [5.0, 20.0, 40.0])
+def test_gaussian_blur_to_rer_001_matches_the_erf_edge(sigma):
+    # The rule of each preset on a Gaussian OTF alone: ER is the normal CDF.
+    # (measured: accurate 9e-11, fast 7e-9; at RER 0.01 a 1e-9 error is 2e-6 NIIRS)
+    for name, tol in (("accurate", 1e-9), ("fast", 1e-7)):
+        nodes, w = quadrature.edge_quadrature(cutoff=1.0 / IFOV, ifov=IFOV,
+                                              **xbsm.method(name).edge_quadrature_knobs())
+        otf = np.exp(-2 * np.pi**2 * (sigma * IFOV) ** 2 * nodes.values**2)
+        rer, _ = edge._edge_terms_kernel(otf, w.values, w["sine_frequency"].values, IFOV)
+        assert float(rer) == pytest.approx(erf(1 / (2 * np.sqrt(2) * sigma)), abs=tol)
+
+
+@pytest.mark.parametrize("sigma", [5.0, 40.0])
+def test_jitter_limited_system_matches_the_dense_reference_unflagged(sigma):
+    sensor = olson_sensor("nir", jitter_x=sigma * IFOV, jitter_y=sigma * IFOV)
+    scenario = xbsm.scenario(**SCENARIO)
+    for method in ("accurate", "fast"):
+        out = niirs_quiet(sensor, scenario, method)
+        reference = dense_rer(sensor, scenario, method)
+        np.testing.assert_allclose([float(out.rer_x), float(out.rer_y)], reference,
+                                   rtol=1e-6)
+        assert not unresolved(out), method
+
+
+def ground_camera(**overrides):
+    """The issue's long-range ground camera: D 0.15 m, f 1.5 m, visible."""
+    return xbsm.sensor(**{**dict(
+        aperture_diameter=0.15, focal_length=1.5, pixel_pitch_x=5e-6, wavelength_min=0.4e-6,
+        wavelength_max=0.7e-6, optics_transmission=0.8, quantum_efficiency=0.6,
+        integration_time=0.01, read_noise=10.0, max_well=20000.0, bit_depth=12.0),
+        **overrides})
+
+
+def test_turbulence_limited_long_path_is_resolved_and_unflagged():
+    # 10 m above the ground, 30 km away, HV 5/7 turbulence: RER about 0.02. Flagged
+    # blur_unresolved before issue 23 (a fixed RER threshold of 0.05) with at most
+    # 0.2 NIIRS at stake; now within 1e-8 relative of the reference.
+    scenario = xbsm.scenario(altitude=10.0, ground_range=30e3, visibility=23.0)
+    for method in ("accurate", "fast"):
+        out = niirs_quiet(ground_camera(), scenario, method)
+        reference = dense_rer(ground_camera(), scenario, method)
+        assert reference.max() < 0.05  # the case the test is about
+        np.testing.assert_allclose([float(out.rer_x), float(out.rer_y)], reference,
+                                   rtol=1e-6)
+        assert not unresolved(out), method
+
+
+def test_the_flag_is_set_where_the_rule_fails():
+    scenario = xbsm.scenario(**SCENARIO)
+    fine = xbsm.method("accurate", nodes_per_panel=12, min_panels=64, grading_ratio=2.0,
+                       graded_frequency=1e-6)
+    # jitter of 2000 px (RER 2e-4) is below the graded panels: off by 2.4 NIIRS, flagged
+    sensor = olson_sensor("nir", jitter_x=2000 * IFOV, jitter_y=2000 * IFOV)
+    for method in ("accurate", "fast"):
+        out = niirs_quiet(sensor, scenario, method)
+        assert unresolved(out), method
+    assert float(abs(niirs_quiet(sensor, scenario, "accurate").niirs
+                     - niirs_quiet(sensor, scenario, fine).niirs).max()) > 0.1
+    # an OTF the panels do not follow (no grading: a 40 px jitter in one uniform panel)
+    sensor = olson_sensor("nir", jitter_x=40 * IFOV, jitter_y=40 * IFOV)
+    for method in ("accurate", "fast"):
+        m = xbsm.method(method, graded_frequency=0.9)
+        assert float(abs(niirs_quiet(sensor, scenario, m).niirs
+                         - niirs_quiet(sensor, scenario, fine).niirs).max()) > 0.1
+        assert unresolved(niirs_quiet(sensor, scenario, m)), method
+    # a drift sinc whose lobes the node limit does not let the rule follow
+    sensor = olson_sensor("nir", drift_rate_x=1000 * IFOV / 0.03, drift_rate_y=0.0)
+    out = niirs_quiet(sensor, scenario, xbsm.method("accurate", max_frequency_nodes=600))
+    assert unresolved(out)
+    # ... and absent where the same rule is fine
+    assert not unresolved(niirs_quiet(sensor, scenario, "accurate"))
+
+
+def test_flags_agree_between_single_calls_and_sweeps():
+    # the labelled (sweep) and direct (single scenario) appliers set the same bits; the
+    # sweep uses the rule of its longest drift for every drift (one rule for the sweep)
+    pixels = xr.DataArray([10.0, 109.0, 1000.0], dims="pixels")
+    jitter = xr.DataArray([0.25 * IFOV, 2000 * IFOV], dims="blur")
+    sensor = olson_sensor("nir", drift_rate_x=pixels * IFOV / 0.03, drift_rate_y=0.0,
+                          jitter_x=jitter)
+    scenario = xbsm.scenario(**SCENARIO)
+    swept = niirs_quiet(sensor, scenario, "fast")
+    flagged = has_flag(swept.flags, "blur_unresolved").any("giqe")
+    assert flagged.sel(blur=1).all() and not flagged.sel(blur=0).any()
+    for i in range(3):
+        for j in range(2):
+            single = niirs_quiet(sensor.isel(pixels=i, blur=j), scenario, "fast")
+            cell = swept.isel(pixels=i, blur=j)
+            np.testing.assert_array_equal(single.flags.values, cell.flags.values)
+            if j == 0:  # resolved: the two rules agree to fast's accuracy (1e-7 relative)
+                np.testing.assert_allclose(single.rer_x, cell.rer_x, rtol=1e-6)
