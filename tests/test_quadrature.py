@@ -166,7 +166,7 @@ def test_kronrod_panels_are_uniform_then_graded_then_one_per_drift_lobe():
     # below a cutoff of 0.5 cycle/px; the first panel, 2e-3 cycle/px, is graded no further
     # with graded_frequency=2e-3
     drift = 500 * IFOV
-    nodes, w = quadrature.edge_quadrature(cutoff=0.5 / IFOV, ifov=IFOV, drift=drift,
+    nodes, w = quadrature.edge_quadrature(cutoff=0.5 / IFOV, ifov=IFOV, lobe_width=drift,
                                           **knobs("accurate", graded_frequency=2e-3))
     assert nodes.sizes["frequency"] == 250 * per_panel
     # the rule integrates the sinc's own closed form: int_0^c sinc(a f) df = Si(pi a c)/(pi a)

@@ -112,11 +112,13 @@ def _edge_chain(ap, r, atm, cutoff, view, m) -> dict:
     """RER and EHO of the system OTF on the x and y slices, at the method's quadrature nodes."""
     ifov_x, ifov_y = view["ifov_x"], view["ifov_y"]
     s = ap.sensor
-    # the drift angle over the nominal exposure (a sensor quantity, so that a sweep over
-    # scenarios shares one rule): the well-fill limit only shortens it, widening the lobes
+    # the widest blur whose OTF has lobes (a sensor quantity, so that a sweep over scenarios
+    # shares one rule): the drift angle over the nominal exposure (the well-fill limit only
+    # shortens it, widening the sinc's lobes) or the defocus blur circle 8 W020 / D
     drift = (np.maximum(abs(s["drift_rate_x"]), abs(s["drift_rate_y"]))
              * s["integration_time"] * s["tdi_stages"])
-    nodes, weights = ap.edge_nodes(cutoff, ifov_x, ifov_y, drift, m)
+    lobe_width = np.maximum(drift, 8.0 * s["defocus_opd"] / s["aperture_diameter"])
+    nodes, weights = ap.edge_nodes(cutoff, ifov_x, ifov_y, lobe_width, m)
     otf = ap.system_slices(nodes, atm, r["spectral_weights"], r["effective_integration_time"],
                            view["slant_range"], m)
     ifov = ap.orientations(ifov_x, ifov_y)
@@ -299,13 +301,16 @@ class Labelled:
             s["focal_length"], elevation=m.elevation, form=m.geometry)
 
     @staticmethod
-    def edge_nodes(cutoff, ifov_x, ifov_y, drift, m):
-        # a drift swept on dims of its own gets the rule of its largest value: finer than
-        # each needs, but one rule, so that the optics OTF is not evaluated per drift
-        own = [d for d in drift.dims if d not in {*cutoff.dims, *ifov_x.dims, *ifov_y.dims}]
+    def edge_nodes(cutoff, ifov_x, ifov_y, lobe_width, m):
+        # a drift (or defocus) swept on dims of its own gets the rule of its largest value:
+        # finer than each needs, but one rule, so that the optics OTF is not evaluated per
+        # drift
+        own = [d for d in lobe_width.dims
+               if d not in {*cutoff.dims, *ifov_x.dims, *ifov_y.dims}]
         if own:
-            drift = drift.max(own)
-        return quadrature.edge_nodes(cutoff, ifov_x, ifov_y, drift, **m.edge_quadrature_knobs())
+            lobe_width = lobe_width.max(own)
+        return quadrature.edge_nodes(cutoff, ifov_x, ifov_y, lobe_width,
+                                     **m.edge_quadrature_knobs())
 
     def system_slices(self, nodes, atm, spectral_weights, integration_time, slant_range, m):
         # the weights carry their wavelengths; ``atm`` is for the direct applier's arrays
@@ -404,9 +409,9 @@ class Direct:
                                        elevation=m.elevation, form=m.geometry)
 
     @staticmethod
-    def edge_nodes(cutoff, ifov_x, ifov_y, drift, m):
+    def edge_nodes(cutoff, ifov_x, ifov_y, lobe_width, m):
         nodes, weights, sine, error = quadrature.edge_rule_arrays(
-            cutoff, ifov_x, ifov_y, drift, **m.edge_quadrature_knobs())
+            cutoff, ifov_x, ifov_y, lobe_width, **m.edge_quadrature_knobs())
         return nodes, (weights, sine, error)
 
     def system_slices(self, nodes, atm, spectral_weights, integration_time, slant_range, m):

@@ -22,7 +22,7 @@ edge [px] and :math:`f_c` the optics cutoff :math:`D/\lambda_{min}`
 
 The ``"accurate"`` and ``"fast"`` presets use the Gauss-Kronrod rule on panels that
 follow the system OTF from sensor quantities alone (uniform panels for the sine's
-oscillation, at least one per lobe of the drift sinc, the first graded geometrically
+oscillation, at least one per OTF lobe of a drift or a defocus, the first graded geometrically
 toward f = 0 for any narrow blur; ``_kronrod_sensors``), so that every scenario of a
 sweep shares one rule.
 
@@ -63,7 +63,7 @@ __all__ = [
 
 #: Edge-response quadrature rules: pyBSM's trapezoid on its grid slice, composite
 #: Gauss-Legendre on uniform panels, or composite Gauss-Kronrod on panels that follow the
-#: system OTF (graded toward f = 0, one per drift-sinc lobe) with its own error estimate.
+#: system OTF (graded toward f = 0, one per drift or defocus lobe) with its own error estimate.
 EDGE_RULES = ("uniform_trapezoid", "gauss_legendre", "gauss_kronrod")
 #: Largest distance from the edge the rules resolve: 3 px covers the edge height overshoot,
 #: which looks at 1 to 3 px from the edge. [px]
@@ -295,36 +295,37 @@ def _kronrod_panels(edges, n):
             (half * (vk - vg)).reshape(shape))
 
 
-def _kronrod_counts(c, ifov, drift, *, nodes_per_panel, panels_per_oscillation, min_panels,
+def _kronrod_counts(c, ifov, lobe_width, *, nodes_per_panel, panels_per_oscillation, min_panels,
                     grading_ratio, graded_frequency, max_nodes):
     """Uniform panels and graded panels of every sensor (integer arrays, ``_kronrod_sensors``)."""
     per_panel = 2 * int(nodes_per_panel) + 1
     n_osc = c * ifov * MAX_POSITION
     base = np.maximum(min_panels, np.ceil(panels_per_oscillation * n_osc)).astype(np.int64)
-    # a drift sinc(a f) has c a lobes below the cutoff: one panel per lobe at least
-    lobes = np.ceil(c * np.where(np.isfinite(drift), drift, 0.0)).astype(np.int64)
+    # an OTF with lobes 1/a apart (a drift's sinc(a f), a defocus blur disk of diameter a)
+    # has about c a of them below the cutoff: one panel per lobe at least
+    lobes = np.ceil(c * np.where(np.isfinite(lobe_width), lobe_width, 0.0)).astype(np.int64)
     uniform = np.maximum(base, lobes)
     width = c * ifov / uniform  # first uniform panel [cycles/px]
     with np.errstate(divide="ignore"):
         graded = np.ceil(np.log(width / graded_frequency) / np.log(grading_ratio))
     graded = np.maximum(graded, 0).astype(np.int64)
     if max_nodes is not None:
-        # the drift panels give way to the node limit (the error estimate then flags the
+        # the lobe panels give way to the node limit (the error estimate then flags the
         # unresolved sinc); the optics' own panels do not (the error below names the cause)
         room = np.maximum(max_nodes // per_panel - graded, base)
         uniform = np.minimum(uniform, room)
     return base, uniform, graded, per_panel
 
 
-def _kronrod_sensors(c, ifov, drift, *, nodes_per_panel, panels_per_oscillation, min_panels,
+def _kronrod_sensors(c, ifov, lobe_width, *, nodes_per_panel, panels_per_oscillation, min_panels,
                     grading_ratio, graded_frequency, max_nodes=None, **_):
     r"""Gauss-Kronrod edge rule of every sensor, all at once (numpy).
 
     Parameters
     ----------
-    c, ifov, drift : numpy.ndarray
-        One shape: optics cutoff [cycles/rad], the larger IFOV [rad] and the larger drift
-        angle over the nominal exposure [rad] of every sensor.
+    c, ifov, lobe_width : numpy.ndarray
+        One shape: optics cutoff [cycles/rad], the larger IFOV [rad] and the lobe width
+        (:func:`edge_nodes`) [rad] of every sensor.
 
     Returns
     -------
@@ -335,20 +336,20 @@ def _kronrod_sensors(c, ifov, drift, *, nodes_per_panel, panels_per_oscillation,
     Notes
     -----
     Panels over :math:`[0, f_c]`: :math:`m = \max(m_{min}, \lceil p\,n_{osc}\rceil,
-    \lceil f_c a\rceil)` uniform ones (the last term: one per lobe of a drift sinc of
-    angle a), the first of them split geometrically (ratio ``grading_ratio``) down to
+    \lceil f_c a\rceil)` uniform ones (the last term: one per lobe of an OTF whose lobes
+    are 1/a apart), the first of them split geometrically (ratio ``grading_ratio``) down to
     ``graded_frequency`` cycles per pixel, so that an OTF living in a small part of the
     passband (jitter, turbulence, defocus: any smooth blur) meets panels of its own scale.
     The sensors with the same panel counts share one node formula.
     """
     flat_c, flat_ifov = c.ravel(), ifov.ravel()
-    flat_drift = np.broadcast_to(drift, c.shape).ravel()
+    flat_lobe = np.broadcast_to(lobe_width, c.shape).ravel()
     good = np.isfinite(flat_c) & (flat_c > 0) & np.isfinite(flat_ifov) & (flat_ifov > 0)
     if not good.all():
         bad = int(np.argmin(good))
         _checked("gauss_kronrod", flat_c[bad], flat_ifov[bad])  # raises its error
     base, uniform, graded, per_panel = _kronrod_counts(
-        flat_c, flat_ifov, flat_drift, nodes_per_panel=nodes_per_panel,
+        flat_c, flat_ifov, flat_lobe, nodes_per_panel=nodes_per_panel,
         panels_per_oscillation=panels_per_oscillation, min_panels=min_panels,
         grading_ratio=grading_ratio, graded_frequency=graded_frequency, max_nodes=max_nodes)
     if max_nodes is not None and (base.max() + graded.max()) * per_panel > max_nodes:
@@ -460,7 +461,7 @@ def _panel_edges(cutoff, n_panels, breakpoints):
 
 def edge_quadrature(*, cutoff, ifov, rule, grid_size, nodes_per_panel, panels_per_oscillation,
                     min_panels, breakpoints=None, frequency_offset=1e-6, name="custom",
-                    max_nodes=None, grading_ratio=4.0, graded_frequency=4e-3, drift=0.0):
+                    max_nodes=None, grading_ratio=4.0, graded_frequency=4e-3, lobe_width=0.0):
     r"""Frequency nodes and weights of an edge-response quadrature rule.
 
     Parameters
@@ -497,8 +498,9 @@ def edge_quadrature(*, cutoff, ifov, rule, grid_size, nodes_per_panel, panels_pe
         Gauss-Kronrod: ratio of successive panels graded toward f = 0. [1]
     graded_frequency : float, optional
         Gauss-Kronrod: lowest graded panel edge. [cycles/px]
-    drift : float, optional
-        Gauss-Kronrod: drift angle over the exposure (one panel per sinc lobe). [rad]
+    lobe_width : float, optional
+        Gauss-Kronrod: the widest blur whose OTF has lobes 1/lobe_width apart (one panel
+        per lobe), as for :func:`edge_nodes`. [rad]
 
     Returns
     -------
@@ -523,13 +525,13 @@ def edge_quadrature(*, cutoff, ifov, rule, grid_size, nodes_per_panel, panels_pe
     cutoff, ifov_max = _checked(rule, cutoff, np.nanmax(np.asarray(ifov, dtype=float)))
     if rule == "gauss_kronrod":
         nodes, weights, error = _kronrod_sensors(
-            np.asarray(cutoff), np.asarray(ifov_max), np.asarray(float(drift)),
+            np.asarray(cutoff), np.asarray(ifov_max), np.asarray(float(lobe_width)),
             nodes_per_panel=nodes_per_panel, panels_per_oscillation=panels_per_oscillation,
             min_panels=min_panels, grading_ratio=grading_ratio,
             graded_frequency=graded_frequency, max_nodes=max_nodes)
         if breakpoints is not None:  # the same panels, split at the kinks
             _, uniform, graded, _ = _kronrod_counts(
-                np.asarray(cutoff), np.asarray(ifov_max), np.asarray(float(drift)),
+                np.asarray(cutoff), np.asarray(ifov_max), np.asarray(float(lobe_width)),
                 nodes_per_panel=nodes_per_panel, panels_per_oscillation=panels_per_oscillation,
                 min_panels=min_panels, grading_ratio=grading_ratio,
                 graded_frequency=graded_frequency, max_nodes=max_nodes)
@@ -606,7 +608,7 @@ def _sensor_grid(*arrays):
     return values, dims, coords
 
 
-def edge_nodes(cutoff, ifov_x, ifov_y, drift=0.0, **knobs):
+def edge_nodes(cutoff, ifov_x, ifov_y, lobe_width=0.0, **knobs):
     """Frequency nodes and quadrature weights for the edge response of every sensor.
 
     Parameters
@@ -615,9 +617,11 @@ def edge_nodes(cutoff, ifov_x, ifov_y, drift=0.0, **knobs):
         Optics cutoff D / lambda_min, possibly over sensor dims. [cycles/rad]
     ifov_x, ifov_y : float or xr.DataArray
         Detector pitch over focal length. [rad]
-    drift : float or xr.DataArray, optional
-        The larger drift angle over the nominal exposure, the drift rate's magnitude x
-        integration time x TDI stages (Gauss-Kronrod: one panel per lobe of its sinc). [rad]
+    lobe_width : float or xr.DataArray, optional
+        The widest blur whose OTF has lobes 1/lobe_width apart: the larger of the drift
+        angle over the nominal exposure (drift rate x integration time x TDI stages; its
+        sinc) and the defocus blur circle's diameter 8 W020 / D (its disk). Gauss-Kronrod:
+        one panel per lobe. [rad]
     **knobs
         The rule's knobs, as for :func:`edge_quadrature`
         (``Method.edge_quadrature_knobs()``).
@@ -631,7 +635,7 @@ def edge_nodes(cutoff, ifov_x, ifov_y, drift=0.0, **knobs):
         Sensors that need fewer nodes than the largest are padded with zero weights.
         [cycles/rad]
     """
-    (c, ix, iy, d), dims, coords = _sensor_grid(cutoff, ifov_x, ifov_y, drift)
+    (c, ix, iy, d), dims, coords = _sensor_grid(cutoff, ifov_x, ifov_y, lobe_width)
     nodes, weights, sine, error = edge_rule_arrays(c, ix, iy, d, **knobs)
     all_dims = ("frequency",) + tuple(dims)
     attrs = {"units": "cycles/rad"}
@@ -710,10 +714,10 @@ def _gauss_legendre_sensors(c, ifov, *, nodes_per_panel, panels_per_oscillation,
 _KRONROD_KNOBS = ("grading_ratio", "graded_frequency")
 
 
-def edge_rule_arrays(cutoff, ifov_x, ifov_y, drift=0.0, **knobs):
+def edge_rule_arrays(cutoff, ifov_x, ifov_y, lobe_width=0.0, **knobs):
     """:func:`edge_nodes` on plain arrays: nodes, weights, sine abscissae, error weights.
 
-    ``cutoff``, ``ifov_x``, ``ifov_y`` and ``drift`` share one shape (0-d for one
+    ``cutoff``, ``ifov_x``, ``ifov_y`` and ``lobe_width`` share one shape (0-d for one
     sensor); the result's arrays are on (node, that shape...). The error weights
     (Kronrod minus embedded Gauss) are None for the other rules.
     """
@@ -721,7 +725,7 @@ def edge_rule_arrays(cutoff, ifov_x, ifov_y, drift=0.0, **knobs):
     rule = knobs.pop("rule")
     c, ifov = np.asarray(cutoff), np.maximum(ifov_x, ifov_y)
     if rule == "gauss_kronrod":
-        nodes, weights, error = _kronrod_sensors(c, ifov, np.asarray(drift, dtype=float),
+        nodes, weights, error = _kronrod_sensors(c, ifov, np.asarray(lobe_width, dtype=float),
                                                 **knobs)
         return nodes, weights, nodes.copy(), error
     knobs = {k: v for k, v in knobs.items() if k not in _KRONROD_KNOBS}
