@@ -49,15 +49,19 @@ OUTPUTS = outputs(
 )
 """The chain's own outputs (the stages declare theirs)."""
 
-_DECLARED = {**radiometry.SIGNAL_OUTPUTS, **noise.OUTPUTS, **geometry.VIEW_OUTPUTS,
+_DECLARED = {**radiometry.SIGNAL_OUTPUTS, **noise.OUTPUTS, **radiometry.SENSITIVITY_OUTPUTS, **geometry.VIEW_OUTPUTS,
              **edge_.SLICE_OUTPUTS, **giqe_.OUTPUTS,
              **quadrature.CUTOFF_OUTPUTS, **OUTPUTS}
 
 
 # ---- the composition ---------------------------------------------------------------
 
-def _snr_chain(ap, m, targets: str):
-    """The SNR chain: its result's variables, the band atmosphere and the optics cutoff."""
+def _snr_chain(ap, m, targets: str, *, sensitivity: bool = False):
+    """The SNR chain: its result's variables, the band atmosphere and the optics cutoff.
+
+    ``sensitivity``: also the target's NETD, NER and NEI (the noise over the temperature
+    derivative of its signal).
+    """
     atm = ap.atmosphere(m)
     radiances = ap.radiances(atm, targets, m)
     band = ap.sensor_band(atm, m)
@@ -79,6 +83,8 @@ def _snr_chain(ap, m, targets: str):
         "spectral_weights": signal["spectral_weights"],
         "flags": flags,
     }
+    if sensitivity:
+        values.update(ap.sensitivity(atm, band, signal, noise_["total_noise"], m))
     return values, atm, cutoff
 
 
@@ -159,6 +165,18 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, m, targets: str) -> xr.Dataset
     with ap.errors():
         values, atm, _ = _snr_chain(ap, m, targets)
         return ap.result(values, atm, m, targets=targets)
+
+
+def netd(sensor: xr.Dataset, scenario: xr.Dataset, m) -> xr.Dataset:
+    """:func:`xbsm.netd` on checked inputs (the scene in the scenario's target) and a method."""
+    ap = applier(sensor, scenario)
+    with ap.errors():
+        values, atm, _ = _snr_chain(ap, m, "scenario", sensitivity=True)
+        flags = ap.flag(values["flags"], "no_thermal_signal",
+                        ~(values["signal_derivative"] > 0.0))
+        contrast = ("snr", "snr_frame", "contrast_photoelectrons", "background_photoelectrons")
+        values = {name: value for name, value in values.items() if name not in contrast}
+        return ap.result({**values, "flags": flags}, atm, m)
 
 
 def niirs(sensor: xr.Dataset, scenario: xr.Dataset, m, calibration) -> xr.Dataset:
@@ -265,6 +283,10 @@ class Labelled:
 
     def noise(self, signal):
         return noise.noise_terms(signal, self.sensor)
+
+    def sensitivity(self, atm, band, signal, total_noise, m):
+        return radiometry.noise_equivalent_terms(self.sensor, self.scenario, atm, band, signal,
+                                                 total_noise, m.constants)
 
     def reflectance_counts(self, signal, integration_time):
         s = self.sensor
@@ -373,6 +395,12 @@ class Direct:
 
     def noise(self, signal):
         return noise.noise_arrays(*noise.noise_inputs(self.sensor, signal))
+
+    def sensitivity(self, atm, band, signal, total_noise, m):
+        p = self.sensor
+        return radiometry.sensitivity_arrays(
+            *radiometry.sensitivity_inputs(p, p, atm, band, signal, total_noise),
+            **radiometry.planck_knobs(m.constants))
 
     @staticmethod
     def flag(flags, name: str, condition):

@@ -1015,3 +1015,137 @@ def reflectance_counts_arrays(target_rate, spectral_weights, dark_current, integ
             "effective_integration_time": integration_time * scale,
             "spectral_weights": brightest / np.fmax.reduce(brightest, axis=-1, keepdims=True),
             "well_fill_scale": scale}
+
+
+# ---- noise-equivalent temperature difference, radiance and irradiance --------------------
+
+def _blackbody_derivative_kernel(wavelength, temperature, *, h, c, k):
+    """Temperature derivative of Planck's law, dL/dT = L (x / T) / (1 - e^-x)."""
+    x = h * c / (wavelength * k * temperature)
+    radiance = _blackbody_kernel(wavelength, temperature, h=h, c=c, k=k)
+    return radiance * (x / temperature) / -np.expm1(-x)
+
+
+_SENSITIVITY = ("wavelength", "quantum_efficiency", "detector_width_x", "detector_width_y",
+                "optics_transmission", "transmission", "target_reflectance",
+                "target_temperature", "focal_length", "aperture_diameter")
+_NOISE_EQUIVALENT = (*_SENSITIVITY, "effective_integration_time", "tdi_stages",
+                     "total_noise")
+SENSITIVITY_OUTPUTS = outputs(
+    Output("signal_derivative", "count K-1",
+           "temperature derivative of the target photoelectrons of one frame",
+           inputs=(*_SENSITIVITY, "effective_integration_time", "tdi_stages")),
+    Output("netd_frame", "K", "single-frame noise-equivalent temperature difference",
+           inputs=_NOISE_EQUIVALENT),
+    Output("netd", "K", "noise-equivalent temperature difference after frame stacking",
+           inputs=(*_NOISE_EQUIVALENT, "frame_stacks")),
+    Output("ner", "W m-2 sr-1",
+           "noise-equivalent band radiance at the aperture after frame stacking",
+           inputs=(*_NOISE_EQUIVALENT, "frame_stacks")),
+    Output("ner_target", "W m-2 sr-1",
+           "noise-equivalent band radiance leaving the target after frame stacking",
+           inputs=(*_NOISE_EQUIVALENT, "frame_stacks")),
+    Output("nei", "W m-2",
+           "noise-equivalent band irradiance at the entrance pupil after frame stacking",
+           inputs=(*_NOISE_EQUIVALENT, "frame_stacks")),
+)
+"""What :func:`sensitivity_arrays` and :func:`noise_equivalent_terms` return."""
+_SENSITIVITY_CORE = tuple(_BAND if name in _SENSITIVITY else ()  # the integrand's arguments
+                          for name in (*_NOISE_EQUIVALENT, "frame_stacks"))
+
+
+def sensitivity_inputs(sensor, scenario, atm, band, signal, total_noise) -> tuple:
+    """The arguments of :func:`sensitivity_arrays`, in order.
+
+    From the sensor's and the scenario's parameters, the band atmosphere, the band terms
+    (:data:`BAND_OUTPUTS`) and the signal stage's outputs (each a mapping by name), and
+    the noise stage's ``total_noise``.
+    """
+    s, sc = sensor, scenario
+    return (atm["wavelength"], band["quantum_efficiency"], s["detector_width_x"],
+            s["detector_width_y"], band["optics_transmission"], atm["transmission"],
+            sc["target_reflectance"], sc["target_temperature"], s["focal_length"],
+            s["aperture_diameter"], signal["effective_integration_time"], s["tdi_stages"],
+            total_noise, s["frame_stacks"])
+
+
+def sensitivity_arrays(wavelength, quantum_efficiency, detector_width_x, detector_width_y,
+                       optics_transmission, transmission, target_reflectance,
+                       target_temperature, focal_length, aperture_diameter,
+                       effective_integration_time, tdi_stages, total_noise, frame_stacks,
+                       *, h, c, k) -> dict:
+    """:data:`SENSITIVITY_OUTPUTS` on plain arrays: NETD, NER and NEI of the target.
+
+    The target's temperature derivative of paper Eq. 1 (its emission, (1 - r) dL_bb/dT,
+    through the path transmission) goes through the same optics, detector and band
+    integral as its signal (:func:`signal_arrays`); the noise is the noise stage's
+    total. The spectral arguments vary along their last axis (or are constant).
+    """
+    emitted = (1.0 - target_reflectance) * _blackbody_derivative_kernel(
+        wavelength, target_temperature, h=h, c=c, k=k)  # at the target [W m-2 sr-1 m-1 K-1]
+    at_aperture = emitted * transmission
+    irradiance = optics_transmission * _focal_plane_kernel(at_aperture, focal_length,
+                                                           aperture_diameter)
+    rate = _rate_kernel(wavelength, quantum_efficiency, detector_width_x, detector_width_y,
+                        irradiance, h=h, c=c)  # [s-1 K-1]
+    derivative = rate * effective_integration_time * tdi_stages
+    with np.errstate(divide="ignore", invalid="ignore"):
+        netd_frame = total_noise / derivative
+    netd = netd_frame / np.sqrt(frame_stacks)
+    ner = netd * _trapezoid_kernel(at_aperture, wavelength)
+    # the pupil irradiance that, collected by the whole pupil (pi D^2 / 4, the obscuration
+    # is in the optics transmission) onto one detector, gives the photoelectrons of the
+    # radiance ner filling the detector's field (pi / (1 + 4 F^2) its throughput)
+    # (on the wavelength axis: the sensor's band arguments come with a length-1 one)
+    pupil = 4.0 * detector_width_x * detector_width_y / (aperture_diameter**2.0
+                                                         + 4.0 * focal_length**2.0)
+    nei = netd * _trapezoid_kernel(at_aperture * pupil, wavelength)
+    return {"signal_derivative": derivative, "netd_frame": netd_frame, "netd": netd,
+            "ner": ner, "ner_target": netd * _trapezoid_kernel(emitted, wavelength),
+            "nei": nei}
+
+
+def noise_equivalent_terms(sensor: xr.Dataset, scenario: xr.Dataset, atmosphere: xr.Dataset,
+                           band: xr.Dataset, signal: xr.Dataset, total_noise,
+                           constants=CODATA) -> xr.Dataset:
+    r"""Noise-equivalent temperature difference, radiance and irradiance of the target.
+
+    Parameters
+    ----------
+    sensor, scenario : xr.Dataset
+        From :func:`xbsm.sensor` and :func:`xbsm.scenario` (the target's reflectance and
+        temperature).
+    atmosphere : xr.Dataset
+        Atmosphere over the band (its ``transmission``).
+    band : xr.Dataset
+        From :func:`sensor_band_terms`.
+    signal : xr.Dataset
+        From :func:`signal_terms` (its ``effective_integration_time``).
+    total_noise : xr.DataArray
+        From :func:`xbsm.noise.noise_terms`. [count]
+    constants : Constants
+        Physical constants.
+
+    Returns
+    -------
+    xr.Dataset
+        ``signal_derivative`` [count K-1], ``netd_frame`` and ``netd`` [K], ``ner`` (at
+        the aperture) and ``ner_target`` (leaving the target) [W m-2 sr-1], ``nei`` (at
+        the entrance pupil) [W m-2].
+
+    Notes
+    -----
+    .. math:: \mathrm{NETD} = \frac{\sigma}{\sqrt{n_f}\,\partial N / \partial T},\qquad
+       \frac{\partial N}{\partial T} = t\,n_{TDI}\int \frac{\lambda}{hc}\,\eta\,w_x w_y\,
+       \tau_o \frac{\pi}{1 + 4F^2}\,\tau_a (1 - r)\frac{\partial L_{bb}}{\partial T}\,
+       d\lambda
+
+    with :math:`\sigma` the total noise, :math:`n_f` the frame stacks; NER is NETD times
+    the band integral of :math:`\tau_a (1 - r)\,\partial L_{bb}/\partial T` (without
+    :math:`\tau_a` at the target), NEI is NER times
+    :math:`4 w_x w_y / (D^2 + 4 f^2)`.
+    """
+    return dataset(apply_orchestrator(
+        sensitivity_arrays, SENSITIVITY_OUTPUTS,
+        *sensitivity_inputs(sensor, scenario, atmosphere, band, signal, total_noise),
+        core=_SENSITIVITY_CORE, **planck_knobs(constants)))
