@@ -88,9 +88,9 @@ def _snr_chain(ap, m, targets: str, *, sensitivity: bool = False):
     return values, atm, cutoff
 
 
-def _niirs_chain(ap, m, calibration) -> dict:
+def _niirs_chain(ap, m, calibration, targets: str = "giqe") -> dict:
     """The NIIRS chain: the SNR chain, the viewing geometry, the edge terms, the GIQE."""
-    r, atm, cutoff = _snr_chain(ap, m, "giqe")
+    r, atm, cutoff = _snr_chain(ap, m, targets)
     view = ap.view(m)
     edges = _edge_chain(ap, r, atm, cutoff, view, m)
     s = ap.sensor
@@ -103,6 +103,9 @@ def _niirs_chain(ap, m, calibration) -> dict:
                         s["aperture_diameter"], edges["ifov"]),
         noise_coefficient=m.giqe4_noise_coefficient, calibration=calibration)
     flags = metrics["flags"] | r["flags"] | edges["flags"]
+    if targets != "giqe":  # the GIQE was fitted on SNRs of its standard target only
+        flags = ap.flag(flags, "target_not_standard", np.logical_not(
+            radiometry.standard_target(targets, s["wavelength_min"], ap.scenario)))
     hidden = ("flags", "ifov", "rer_unfiltered_x", "rer_unfiltered_y")
     return {
         "niirs": metrics["niirs"],
@@ -179,11 +182,12 @@ def netd(sensor: xr.Dataset, scenario: xr.Dataset, m) -> xr.Dataset:
         return ap.result({**values, "flags": flags}, atm, m)
 
 
-def niirs(sensor: xr.Dataset, scenario: xr.Dataset, m, calibration) -> xr.Dataset:
+def niirs(sensor: xr.Dataset, scenario: xr.Dataset, m, calibration,
+          targets: str = "giqe") -> xr.Dataset:
     """:func:`xbsm.niirs` on checked inputs, a resolved method and calibration."""
     ap = applier(sensor, scenario)
     with ap.errors():
-        values = _niirs_chain(ap, m, calibration)
+        values = _niirs_chain(ap, m, calibration, targets)
         return ap.result(values, None, m, flags="NIIRS validity flags")
 
 

@@ -13,13 +13,25 @@ import xarray as xr
 
 from . import _chain, metrics, params
 from .methods import method as resolve_method
-from .params import Choice, Resolved, check_inputs, contract
-from .radiometry import TARGETS
+from .params import Choice, Either, Instance, Resolved, check_inputs, contract
+from .radiometry import TARGETS, check_target_set, targets_on_scenario
 
 _METHOD = Resolved(resolve_method)
+_TARGETS = Either(Choice(TARGETS), Instance(xr.Dataset, "a target set from "
+                                            "xbsm.radiometry.target_set(...)"))
 
 
-@contract(method=_METHOD, targets=Choice(TARGETS))
+def _targets(sensor: xr.Dataset, scenario: xr.Dataset, targets):
+    """Checked inputs, with a target set's targets put on the scenario's background."""
+    check_inputs(sensor, scenario)
+    if isinstance(targets, str):
+        return scenario, targets
+    scenario = targets_on_scenario(scenario, check_target_set("targets", targets))
+    check_inputs(sensor, scenario)  # each target's reflectance in [0, 1]
+    return scenario, "scenario"
+
+
+@contract(method=_METHOD, targets=_TARGETS)
 def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets="giqe"):
     """Contrast signal-to-noise ratio and its breakdown (paper Sec. 2.2-2.3, Figure 4).
 
@@ -31,11 +43,13 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
         From :func:`xbsm.scenario`.
     method : str or Method
         "accurate" (default), "fast" or "pybsm", or a :class:`xbsm.methods.Method`.
-    targets : {"giqe", "scenario"}
+    targets : {"giqe", "scenario"} or xr.Dataset
         "giqe": the GIQE standard target and background (15% / 7% at 282 K /
         280 K; reflectance 0 in bands starting at or beyond 2.9 um), as the
         NIIRS chain uses; "scenario": the scenario's own reflectances and
-        temperatures.
+        temperatures; or a target set (:func:`xbsm.radiometry.target_set`,
+        :func:`xbsm.radiometry.standard_targets`): each target on the scenario's
+        background, over dim ``target``.
 
     Returns
     -------
@@ -49,7 +63,7 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
         spectral photoelectron rate, which weights the OTFs, paper Eq. 3) and
         ``flags``.
     """
-    check_inputs(sensor, scenario)
+    scenario, targets = _targets(sensor, scenario, targets)
     return _chain.snr(sensor, scenario, method, targets)
 
 
@@ -111,8 +125,9 @@ def netd(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, tempera
     return _chain.netd(sensor, scenario, method)
 
 
-@contract(method=_METHOD, calibration=Resolved(metrics.giqe_calibrations))
-def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibration=None):
+@contract(method=_METHOD, calibration=Resolved(metrics.giqe_calibrations), targets=_TARGETS)
+def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibration=None,
+          targets="giqe"):
     """Predicted NIIRS by GIQE 3, 4 and 5 with every intermediate (paper Sec. 3).
 
     Parameters
@@ -127,6 +142,11 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
         GIQE calibration ranges for the flags, by version, e.g.
         ``{5: xbsm.metrics.GIQE5_CALIBRATION.replace(snr=(2, 130))}``; versions
         left out keep :data:`xbsm.metrics.GIQE_CALIBRATIONS`. Changes flags only.
+    targets : {"giqe", "scenario"} or xr.Dataset
+        Whose contrast SNR the GIQE reads, as for :func:`snr`. Default the GIQE's
+        standard target, on which the GIQE was fitted; any other target (the
+        scenario's, where it differs from the standard, or a target set) sets
+        ``target_not_standard``, a calibration flag, on every ``giqe``.
 
     Returns
     -------
@@ -150,8 +170,8 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
     without the post-processing filter (as pyBSM's ``niirs5``), GIQE 3 and 4
     with it, with its noise gain.
     """
-    check_inputs(sensor, scenario)
-    return _chain.niirs(sensor, scenario, method, calibration)
+    scenario, targets = _targets(sensor, scenario, targets)
+    return _chain.niirs(sensor, scenario, method, calibration, targets)
 
 
 @contract(method=_METHOD)

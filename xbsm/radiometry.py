@@ -1149,3 +1149,146 @@ def noise_equivalent_terms(sensor: xr.Dataset, scenario: xr.Dataset, atmosphere:
         sensitivity_arrays, SENSITIVITY_OUTPUTS,
         *sensitivity_inputs(sensor, scenario, atmosphere, band, signal, total_noise),
         core=_SENSITIVITY_CORE, **planck_knobs(constants)))
+
+
+# ---- targets: the GIQE's standard one, the scenario's, or a set of one's own --------------
+
+TARGET_SETS = MappingProxyType({
+    "nato_image_intensifier_gen2": MappingProxyType({
+        "characteristic_dimension": 2.3, "thermal_contrast": 0.0, "reflectance_contrast": 0.25,
+        "source": "NATO STANAG on the nominal static range of image intensifier systems, "
+                  "para. 6 (target 2.3 x 2.3 m, initial contrast C0 = 0.25 for 2nd "
+                  "generation), as reproduced at https://nippon.zaidan.info/seikabutsu/1998/"
+                  "00222/contents/099.htm"}),
+    "nato_image_intensifier_gen3": MappingProxyType({
+        "characteristic_dimension": 2.3, "thermal_contrast": 0.0, "reflectance_contrast": 0.4,
+        "source": "as nato_image_intensifier_gen2 (C0 = 0.4 for 3rd generation)"}),
+    "imo_night_vision": MappingProxyType({
+        "characteristic_dimension": 1.5**0.5, "thermal_contrast": 1.0,
+        "reflectance_contrast": 0.25,
+        "source": "IMO performance standard for night vision equipment for high-speed craft, "
+                  "5.2.6 (target 1.5 m high x 1 m wide; contrast at most 0.25 in the visual "
+                  "and near infrared, temperature difference at most 1 K), as reproduced at "
+                  "https://nippon.zaidan.info/seikabutsu/1998/00226/contents/021.htm"}),
+})
+"""Published standard targets: characteristic dimension sqrt(area) [m], thermal contrast
+(target minus background temperature) [K], reflectance contrast (Weber contrast of the
+reflectances, (r_t - r_b) / r_b, the standards' initial contrast read so) [1], and the
+source. :func:`target_set` makes a set of one's own."""
+
+_TARGET_SPECS = MappingProxyType({
+    "characteristic_dimension": ("m", "target characteristic dimension, sqrt(area)", 0.0),
+    "thermal_contrast": ("K", "target minus background temperature", -np.inf),
+    "reflectance_contrast": ("1", "target reflectance contrast (r_t - r_b) / r_b", -1.0),
+})
+
+
+def target_set(characteristic_dimension, thermal_contrast=0.0, reflectance_contrast=0.0, *,
+               names=None) -> xr.Dataset:
+    """A set of targets as data, on dim ``target``: for ``targets=`` of snr and niirs.
+
+    Parameters
+    ----------
+    characteristic_dimension : float or array_like
+        Square root of the target's area, in (0, inf). [m]
+    thermal_contrast : float or array_like
+        Target temperature minus the background's (the scenario's
+        ``background_temperature``), finite. [K]
+    reflectance_contrast : float or array_like
+        Weber contrast of the reflectances, (r_t - r_b) / r_b, in [-1, inf), with r_b the
+        scenario's ``background_reflectance``. [1]
+    names : sequence of str, optional
+        The targets' names (the ``target`` coordinate); default 0, 1, ...
+
+    Returns
+    -------
+    xr.Dataset
+        ``characteristic_dimension``, ``thermal_contrast``, ``reflectance_contrast`` over
+        ``target``, each with ``units`` and ``long_name``.
+    """
+    values = {"characteristic_dimension": characteristic_dimension,
+              "thermal_contrast": thermal_contrast, "reflectance_contrast": reflectance_contrast}
+    arrays = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, dtype=float))
+                                   for v in values.values()))
+    for (name, (units, _, low)), array in zip(_TARGET_SPECS.items(), arrays, strict=True):
+        if array.ndim != 1:
+            raise ValueError(f"{name} must be a number or a 1-D sequence; got shape "
+                             f"{array.shape}")
+        bad = ~np.isfinite(array) | (array <= low if name == "characteristic_dimension"
+                                     else array < low)
+        if np.any(bad):
+            interval = "(0, inf)" if low == 0.0 else f"[{low:g}, inf)"
+            raise ValueError(f"{name} must be finite and lie in {interval} {units}; got "
+                             f"{array[bad][0]!r}")
+    labels = list(range(arrays[0].size)) if names is None else list(names)
+    if len(labels) != arrays[0].size:
+        raise ValueError(f"names must give one name per target ({arrays[0].size}); got "
+                         f"{len(labels)}")
+    return xr.Dataset(
+        {name: ("target", array, {"units": units, "long_name": long_name})
+         for (name, (units, long_name, _)), array in zip(_TARGET_SPECS.items(), arrays,
+                                                           strict=True)},
+        coords={"target": labels}, attrs={"xbsm_kind": "target_set"})
+
+
+def standard_targets(*names: str) -> xr.Dataset:
+    """The published standard targets of :data:`TARGET_SETS` (all by default) as a set.
+
+    Parameters
+    ----------
+    *names : str
+        Keys of :data:`TARGET_SETS`.
+
+    Returns
+    -------
+    xr.Dataset
+        As :func:`target_set`, with each target's ``source`` as a coordinate.
+    """
+    names = names or tuple(TARGET_SETS)
+    unknown = [n for n in names if n not in TARGET_SETS]
+    if unknown:
+        raise ValueError(f"target set names must be among {sorted(TARGET_SETS)}; got "
+                         f"{unknown[0]!r}")
+    rows = [TARGET_SETS[n] for n in names]
+    out = target_set(*([row[key] for row in rows] for key in _TARGET_SPECS), names=names)
+    return out.assign_coords(source=("target", [row["source"] for row in rows]))
+
+
+def check_target_set(name: str, value) -> xr.Dataset:
+    """``value`` if it is a target set (:func:`target_set`), else a ValueError naming ``name``."""
+    if not (isinstance(value, xr.Dataset) and value.attrs.get("xbsm_kind") == "target_set"):
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, TARGETS))} or a target "
+                         "set from xbsm.radiometry.target_set(...) or standard_targets(...); "
+                         f"got {type(value).__name__}")
+    return value
+
+
+def targets_on_scenario(scenario: xr.Dataset, targets: xr.Dataset) -> xr.Dataset:
+    """The scenario with each target of a set on its background, over dim ``target``.
+
+    The target's temperature is the background's plus the thermal contrast, its
+    reflectance the background's times one plus the reflectance contrast; the background
+    stays the scenario's.
+    """
+    out = scenario.assign(
+        target_temperature=scenario["background_temperature"] + targets["thermal_contrast"],
+        target_reflectance=scenario["background_reflectance"]
+        * (1.0 + targets["reflectance_contrast"]))
+    for name in ("target_temperature", "target_reflectance"):
+        out[name].attrs = dict(scenario[name].attrs)
+    return out
+
+
+def standard_target(targets: str, wavelength_min, scenario):
+    """Whether the target and background are the GIQE's standard ones (:func:`surfaces`).
+
+    True for ``"giqe"``; for ``"scenario"``, where the scenario's four values equal the
+    standard's (the emissive convention from :data:`EMISSIVE_BAND_START`). [bool]
+    """
+    if targets == "giqe":
+        return np.True_
+    given = surfaces(targets, wavelength_min, scenario)
+    standard = surfaces("giqe", wavelength_min, scenario)
+    same = [value == expected for pair, reference in zip(given, standard, strict=True)
+            for value, expected in zip(pair, reference, strict=True)]
+    return same[0] & same[1] & same[2] & same[3]
