@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 import xarray as xr
 from scipy import constants as const
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.integrate import quad
 
 import xbsm
@@ -178,6 +180,20 @@ def test_netd_falls_with_integration_time_until_the_well_fills():
     assert np.all(np.diff(values[~full]) < 0)
     # past the well: the integration time is shortened to fill it, the NETD stays put
     np.testing.assert_allclose(values[full], values[full][0], rtol=1e-12)
+
+
+@settings(max_examples=15, deadline=None)
+@given(d=st.floats(0.01, 0.2), t=st.floats(1e-5, 1e-2), rn=st.floats(0.0, 2000.0),
+       grow=st.floats(1.05, 3.0))
+def test_netd_trends_hold_over_random_cameras(d, t, rn, grow):
+    base = {"aperture_diameter": d, "integration_time": t, "read_noise": rn}
+    netd = float(netd_of(**base)["netd"])
+    assert 0.0 < netd < math.inf
+    assert float(netd_of(**{**base, "aperture_diameter": d * grow})["netd"]) < netd
+    assert float(netd_of(**{**base, "read_noise": rn * grow + 1.0})["netd"]) > netd
+    longer = netd_of(**{**base, "integration_time": t * grow})
+    if not bool(has_flag(longer["flags"], "well_fill_limited")):
+        assert float(longer["netd"]) < netd
 
 
 def test_netd_rises_with_read_noise():

@@ -407,7 +407,8 @@ def test_snr_takes_a_target_set_over_dim_target():
 ])
 def test_niirs_refuses_bad_targets(targets, message):
     with pytest.raises(ValueError, match=message):
-        xbsm.niirs(olson_sensor(), xbsm.scenario(altitude=9000.0, ground_range=20e3, visibility=23.0),
+        xbsm.niirs(olson_sensor(),
+                   xbsm.scenario(altitude=9000.0, ground_range=20e3, visibility=23.0),
                    targets=targets)
 
 

@@ -49,7 +49,8 @@ OUTPUTS = outputs(
 )
 """The chain's own outputs (the stages declare theirs)."""
 
-_DECLARED = {**radiometry.SIGNAL_OUTPUTS, **noise.OUTPUTS, **radiometry.SENSITIVITY_OUTPUTS, **geometry.VIEW_OUTPUTS,
+_DECLARED = {**radiometry.SIGNAL_OUTPUTS, **noise.OUTPUTS, **radiometry.SENSITIVITY_OUTPUTS,
+             **geometry.VIEW_OUTPUTS,
              **edge_.SLICE_OUTPUTS, **giqe_.OUTPUTS,
              **quadrature.CUTOFF_OUTPUTS, **OUTPUTS}
 
