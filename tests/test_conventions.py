@@ -164,6 +164,11 @@ NOT_LABELLED = MappingProxyType({
     **{f"xbsm.radiometry.{name}_inputs": f"returns the arguments of {name}_arrays, as given"
        for name in ("radiance", "sensor_band", "signal", "sensitivity")},
     "xbsm.radiometry.surfaces": "returns the (reflectance, temperature) pairs, as given",
+    "xbsm.radiometry.target_set": "returns a target set: parameters (with units), not a result",
+    "xbsm.radiometry.standard_targets": "returns a target set: parameters, not a result",
+    "xbsm.radiometry.check_target_set": "a validator: returns its argument or raises",
+    "xbsm.radiometry.targets_on_scenario": "returns a scenario dataset (parameters)",
+    "xbsm.radiometry.standard_target": "returns a bool that feeds a flag",
     "xbsm.radiometry.planck_knobs": "returns the kernels' constants as plain floats",
     "xbsm.radiometry.curve_on_band": "resample_spectral on plain arrays (the direct applier)",
     "xbsm.radiometry.resample_spectral": "keeps the attributes of the sensor curve it resamples",
