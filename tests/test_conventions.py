@@ -74,6 +74,9 @@ EXPECTED_UNITS = MappingProxyType({
     "spectral_weights": "s-1 m-1",
     "path_rate": "s-1", "target_scene_rate": "s-1", "background_scene_rate": "s-1",
     "sensor_rate": "s-1", "target_rate": "s-1",
+    # noise-equivalent quantities
+    "signal_derivative": "count K-1", "netd": "K", "netd_frame": "K", "ner": "W m-2 sr-1",
+    "ner_target": "W m-2 sr-1", "nei": "W m-2",
     # edge terms and GIQE
     "rer": "1", "rer_x": "1", "rer_y": "1", "eho": "1", "eho_x": "1", "eho_y": "1",
     "rer_giqe5": "1", "noise_gain": "1", "edge_response": "1",
@@ -160,8 +163,13 @@ NOT_LABELLED = MappingProxyType({
     "xbsm.radiometry.is_emissive_band": "returns a bool",
     "xbsm.noise.noise_inputs": "returns the arguments of noise_arrays, as given",
     **{f"xbsm.radiometry.{name}_inputs": f"returns the arguments of {name}_arrays, as given"
-       for name in ("radiance", "sensor_band", "signal")},
+       for name in ("radiance", "sensor_band", "signal", "sensitivity")},
     "xbsm.radiometry.surfaces": "returns the (reflectance, temperature) pairs, as given",
+    "xbsm.radiometry.target_set": "returns a target set: parameters (with units), not a result",
+    "xbsm.radiometry.standard_targets": "returns a target set: parameters, not a result",
+    "xbsm.radiometry.check_target_set": "a validator: returns its argument or raises",
+    "xbsm.radiometry.targets_on_scenario": "returns a scenario dataset (parameters)",
+    "xbsm.radiometry.standard_target": "returns a bool that feeds a flag",
     "xbsm.radiometry.planck_knobs": "returns the kernels' constants as plain floats",
     "xbsm.radiometry.curve_on_band": "resample_spectral on plain arrays (the direct applier)",
     "xbsm.radiometry.resample_spectral": "keeps the attributes of the sensor curve it resamples",
@@ -190,7 +198,7 @@ NOT_LABELLED = MappingProxyType({
                     "quadrature.band_cutoff_arrays", "quadrature.edge_rule_arrays",
                     "quadrature.undersampled_arrays", "radiometry.radiance_arrays",
                     "radiometry.sensor_band_arrays", "radiometry.signal_arrays",
-                    "radiometry.reflectance_counts_arrays",
+                    "radiometry.reflectance_counts_arrays", "radiometry.sensitivity_arrays",
                     "metrics.edge.slice_terms_arrays", "metrics.giqe.giqe_arrays",
                     "metrics.giqe.sampling_q_arrays", "otf.system.system_slice_arrays")},
 })
@@ -277,6 +285,7 @@ def _model_cases():
     s, sc = _olson()
     cases = {
         "snr": lambda: xbsm.snr(s, sc),
+        "netd": lambda: xbsm.netd(s, sc),
         "system_otf": lambda: xbsm.system_otf(s, sc),
         "reflectance_to_photoelectrons": lambda: reflectance_to_photoelectrons(s, sc),
     }
@@ -346,6 +355,9 @@ def _cases():
         "well_fill_scale": lambda: radiometry.well_fill_scale(
             xr.DataArray([1e4, 1e5], dims="n"), 96000.0, 0.6),
         "sensor_band_terms": lambda: radiometry.sensor_band_terms(s, _band()["wavelength"]),
+        "noise_equivalent_terms": lambda: radiometry.noise_equivalent_terms(
+            s, sc, _band(), radiometry.sensor_band_terms(s, _band()["wavelength"]), _signal(),
+            noise.noise_terms(_signal(), s)["total_noise"]),
         "detector_irradiance": lambda: radiometry.detector_irradiance(
             radiometry.total_radiance(_band(), 0.15, 282.0),
             radiometry.sensor_band_terms(s, _band()["wavelength"]), s),

@@ -336,3 +336,84 @@ def test_niirs_rejects_an_invalid_calibration(calibration, match):
     sc = olson_scenario(ground_range=0.0, visibility=23.0)
     with pytest.raises(ValueError, match=match):
         xbsm.niirs(olson_sensor("nir"), sc, calibration=calibration)
+
+
+# ---- your own target (issue 25, item 2) ------------------------------------------------
+
+def _giqe4(r):
+    """GIQE 4 (Leachtenauer et al. 1997, coefficients as published; G/SNR term 0.344)."""
+    rer, gsd_in = float(r["rer"]), float(r["gsd_gp"]) / 0.0254
+    a, b = (3.32, 1.559) if rer >= 0.9 else (3.16, 2.817)
+    return (10.251 - a * np.log10(gsd_in) + b * np.log10(rer) - 0.656 * float(r["eho"])
+            - 0.344 * float(r["noise_gain"]) / float(r["snr"]))
+
+
+@pytest.mark.parametrize("method", ["accurate", "pybsm"])
+def test_niirs_with_the_standard_target_is_todays_niirs_bit_for_bit(method):
+    s, sc = olson_sensor(), xbsm.scenario(altitude=9000.0, ground_range=20e3, visibility=23.0)
+    xr.testing.assert_identical(xbsm.niirs(s, sc, method),
+                                xbsm.niirs(s, sc, method, targets="giqe"))
+    assert not bool(has_flag(xbsm.niirs(s, sc, method).flags, "target_not_standard").any())
+
+
+def test_niirs_of_a_target_set_follows_the_contrast_ratio_and_is_flagged():
+    s = olson_sensor()
+    sc = xbsm.scenario(altitude=9000.0, ground_range=20e3, visibility=23.0,
+                       background_reflectance=0.2, background_temperature=290.0)
+    contrasts = [0.1, 0.3]
+    targets = xbsm.radiometry.target_set(2.3, 0.0, contrasts, names=["low", "high"])
+    n = xbsm.niirs(s, sc, targets=targets)
+    # Eq. 1 is linear in reflectance: at equal temperature the contrast photoelectron
+    # rate is proportional to r_t - r_b = r_b c (well-fill scaling divided out)
+    rate = n["contrast_photoelectrons"] / n["effective_integration_time"]
+    assert float(rate.sel(target="high") / rate.sel(target="low")) == pytest.approx(
+        contrasts[1] / contrasts[0], rel=1e-12)
+    # the GIQE reads that target's SNR: contrast over the chain's total noise
+    np.testing.assert_allclose(n["snr"], n["contrast_photoelectrons"] / n["total_noise"],
+                               rtol=1e-14)
+    for target in ("low", "high"):
+        cell = n.sel(target=target)
+        assert float(cell.niirs.sel(giqe=4)) == pytest.approx(_giqe4(cell), abs=1e-12)
+    assert float(n.snr.sel(target="high")) > float(n.snr.sel(target="low"))
+    assert float(n.niirs.sel(giqe=4, target="high")) > float(n.niirs.sel(giqe=4, target="low"))
+    flagged = has_flag(n.flags, "target_not_standard")
+    assert bool(flagged.all())
+    assert bool(xbsm.flags.is_outside_calibration(n.flags).all())
+
+
+def test_niirs_of_the_scenarios_own_target_is_flagged_unless_it_is_the_standard():
+    s = olson_sensor()
+    own = xbsm.niirs(s, xbsm.scenario(altitude=9000.0, ground_range=20e3, visibility=23.0),
+                     targets="scenario")
+    assert bool(has_flag(own.flags, "target_not_standard").all())
+    standard = xbsm.scenario(altitude=9000.0, ground_range=20e3, visibility=23.0,
+                             target_reflectance=0.15, target_temperature=282.0,
+                             background_reflectance=0.07, background_temperature=280.0)
+    same = xbsm.niirs(s, standard, targets="scenario")
+    assert not bool(has_flag(same.flags, "target_not_standard").any())
+    xr.testing.assert_identical(same.niirs, xbsm.niirs(s, standard).niirs)
+
+
+def test_snr_takes_a_target_set_over_dim_target():
+    s, sc = olson_sensor(), xbsm.scenario(altitude=9000.0, ground_range=20e3, visibility=23.0)
+    r = xbsm.snr(s, sc, targets=xbsm.radiometry.standard_targets())
+    assert r["snr"].dims == ("target",) and r.sizes["target"] == 3
+
+
+@pytest.mark.parametrize(("targets", "message"), [
+    ("mine", "targets must be one of 'giqe', 'scenario'"),
+    (xr.Dataset(), "targets must be one of 'giqe', 'scenario' or a target set"),
+    (3.0, "targets must be a target set"),
+])
+def test_niirs_refuses_bad_targets(targets, message):
+    with pytest.raises(ValueError, match=message):
+        xbsm.niirs(olson_sensor(),
+                   xbsm.scenario(altitude=9000.0, ground_range=20e3, visibility=23.0),
+                   targets=targets)
+
+
+def test_a_target_set_brighter_than_white_is_refused():
+    with pytest.raises(ValueError, match="target_reflectance must lie in"):
+        xbsm.snr(olson_sensor(), xbsm.scenario(altitude=9000.0, ground_range=20e3, visibility=23.0,
+                                        background_reflectance=0.5),
+                 targets=xbsm.radiometry.target_set(2.0, 0.0, 1.5))

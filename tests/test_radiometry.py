@@ -252,3 +252,41 @@ def test_signal_terms_without_noise_rates_leave_the_rest_unchanged():
     assert set(full.data_vars) - set(short.data_vars) == set(radiometry.NOISE_RATES)
     for name in short.data_vars:
         xr.testing.assert_identical(short[name], full[name])
+
+
+# ---- target sets (issue 25, item 2) ----------------------------------------------------
+
+def test_target_set_is_labelled_data_over_target():
+    t = radiometry.target_set([2.3, 3.0], [1.25, 2.0], names=["a", "b"])
+    assert list(t["target"].values) == ["a", "b"]
+    assert t["characteristic_dimension"].attrs["units"] == "m"
+    assert t["thermal_contrast"].attrs["units"] == "K"
+    assert t["reflectance_contrast"].values.tolist() == [0.0, 0.0]
+
+
+def test_standard_targets_carry_their_sources():
+    t = radiometry.standard_targets()
+    assert set(t["target"].values) == set(radiometry.TARGET_SETS)
+    assert all("nippon.zaidan.info" in src or src.startswith("as ")
+               for src in t["source"].values)
+    # STANAG image intensifier target: 2.3 m x 2.3 m, C0 0.25 / 0.4 (para. 6)
+    assert float(t["characteristic_dimension"].sel(target="nato_image_intensifier_gen3")) == 2.3
+    assert float(t["reflectance_contrast"].sel(target="nato_image_intensifier_gen3")) == 0.4
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"characteristic_dimension": 0.0}, "characteristic_dimension must be finite and lie in"),
+    ({"characteristic_dimension": 2.0, "thermal_contrast": np.inf}, "thermal_contrast must"),
+    ({"characteristic_dimension": 2.0, "reflectance_contrast": -1.5},
+     "reflectance_contrast must be finite and lie in"),
+    ({"characteristic_dimension": [[2.0]]}, "must be a number or a 1-D sequence"),
+    ({"characteristic_dimension": [2.0, 3.0], "names": ["a"]}, "names must give one name"),
+])
+def test_target_set_refuses_bad_values(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        radiometry.target_set(**kwargs)
+
+
+def test_standard_targets_refuse_unknown_names():
+    with pytest.raises(ValueError, match="target set names must be among"):
+        radiometry.standard_targets("nvesd_12")

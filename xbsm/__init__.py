@@ -37,6 +37,7 @@ _PUBLIC = {
     "open_atmosphere": "atmosphere",
     "scenario": "params",
     "sensor": "params",
+    "netd": "model",
     "niirs": "model",
     "snr": "model",
     "system_otf": "model",

@@ -49,15 +49,20 @@ OUTPUTS = outputs(
 )
 """The chain's own outputs (the stages declare theirs)."""
 
-_DECLARED = {**radiometry.SIGNAL_OUTPUTS, **noise.OUTPUTS, **geometry.VIEW_OUTPUTS,
+_DECLARED = {**radiometry.SIGNAL_OUTPUTS, **noise.OUTPUTS, **radiometry.SENSITIVITY_OUTPUTS,
+             **geometry.VIEW_OUTPUTS,
              **edge_.SLICE_OUTPUTS, **giqe_.OUTPUTS,
              **quadrature.CUTOFF_OUTPUTS, **OUTPUTS}
 
 
 # ---- the composition ---------------------------------------------------------------
 
-def _snr_chain(ap, m, targets: str):
-    """The SNR chain: its result's variables, the band atmosphere and the optics cutoff."""
+def _snr_chain(ap, m, targets: str, *, sensitivity: bool = False):
+    """The SNR chain: its result's variables, the band atmosphere and the optics cutoff.
+
+    ``sensitivity``: also the target's NETD, NER and NEI (the noise over the temperature
+    derivative of its signal).
+    """
     atm = ap.atmosphere(m)
     radiances = ap.radiances(atm, targets, m)
     band = ap.sensor_band(atm, m)
@@ -79,12 +84,14 @@ def _snr_chain(ap, m, targets: str):
         "spectral_weights": signal["spectral_weights"],
         "flags": flags,
     }
+    if sensitivity:
+        values.update(ap.sensitivity(atm, band, signal, noise_["total_noise"], m))
     return values, atm, cutoff
 
 
-def _niirs_chain(ap, m, calibration) -> dict:
+def _niirs_chain(ap, m, calibration, targets: str = "giqe") -> dict:
     """The NIIRS chain: the SNR chain, the viewing geometry, the edge terms, the GIQE."""
-    r, atm, cutoff = _snr_chain(ap, m, "giqe")
+    r, atm, cutoff = _snr_chain(ap, m, targets)
     view = ap.view(m)
     edges = _edge_chain(ap, r, atm, cutoff, view, m)
     s = ap.sensor
@@ -97,6 +104,9 @@ def _niirs_chain(ap, m, calibration) -> dict:
                         s["aperture_diameter"], edges["ifov"]),
         noise_coefficient=m.giqe4_noise_coefficient, calibration=calibration)
     flags = metrics["flags"] | r["flags"] | edges["flags"]
+    if targets != "giqe":  # the GIQE was fitted on SNRs of its standard target only
+        flags = ap.flag(flags, "target_not_standard", np.logical_not(
+            radiometry.standard_target(targets, s["wavelength_min"], ap.scenario)))
     hidden = ("flags", "ifov", "rer_unfiltered_x", "rer_unfiltered_y")
     return {
         "niirs": metrics["niirs"],
@@ -173,11 +183,24 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, m, targets: str) -> xr.Dataset
         return ap.result(values, atm, m, targets=targets)
 
 
-def niirs(sensor: xr.Dataset, scenario: xr.Dataset, m, calibration) -> xr.Dataset:
+def netd(sensor: xr.Dataset, scenario: xr.Dataset, m) -> xr.Dataset:
+    """:func:`xbsm.netd` on checked inputs (the scene in the scenario's target) and a method."""
+    ap = applier(sensor, scenario)
+    with ap.errors():
+        values, atm, _ = _snr_chain(ap, m, "scenario", sensitivity=True)
+        flags = ap.flag(values["flags"], "no_thermal_signal",
+                        ~(values["signal_derivative"] > 0.0))
+        contrast = ("snr", "snr_frame", "contrast_photoelectrons", "background_photoelectrons")
+        values = {name: value for name, value in values.items() if name not in contrast}
+        return ap.result({**values, "flags": flags}, atm, m)
+
+
+def niirs(sensor: xr.Dataset, scenario: xr.Dataset, m, calibration,
+          targets: str = "giqe") -> xr.Dataset:
     """:func:`xbsm.niirs` on checked inputs, a resolved method and calibration."""
     ap = applier(sensor, scenario)
     with ap.errors():
-        values = _niirs_chain(ap, m, calibration)
+        values = _niirs_chain(ap, m, calibration, targets)
         return ap.result(values, None, m, flags="NIIRS validity flags")
 
 
@@ -277,6 +300,10 @@ class Labelled:
 
     def noise(self, signal):
         return noise.noise_terms(signal, self.sensor)
+
+    def sensitivity(self, atm, band, signal, total_noise, m):
+        return radiometry.noise_equivalent_terms(self.sensor, self.scenario, atm, band, signal,
+                                                 total_noise, m.constants)
 
     def reflectance_counts(self, signal, integration_time):
         s = self.sensor
@@ -393,6 +420,12 @@ class Direct:
 
     def noise(self, signal):
         return noise.noise_arrays(*noise.noise_inputs(self.sensor, signal))
+
+    def sensitivity(self, atm, band, signal, total_noise, m):
+        p = self.sensor
+        return radiometry.sensitivity_arrays(
+            *radiometry.sensitivity_inputs(p, p, atm, band, signal, total_noise),
+            **radiometry.planck_knobs(m.constants))
 
     @staticmethod
     def flag(flags, name: str, condition):

@@ -126,11 +126,21 @@ FLAGS = MappingProxyType({
         "both bracketing altitude tables (horizon or end of a table's coverage): the "
         "atmosphere was interpolated at fixed ground range ('log-linear') instead",
     ),
+    "no_thermal_signal": (
+        2097152,
+        "the target's photoelectrons do not grow with its temperature (zero emissivity, "
+        "path transmission or response in the band): NETD, NER and NEI are infinite or NaN",
+    ),
+    "target_not_standard": (
+        4194304,
+        "the target is not GIQE's standard one (15% / 7% at 282 K / 280 K): the GIQE was "
+        "fitted on imagery rated against that SNR convention, not on this target",
+    ),
 })
 
 INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive", "rer_nonpositive",
            "blur_unresolved", "grd_unresolved", "upsampled", "image_nonfinite", "image_small",
-           "reference_unresolved")
+           "reference_unresolved", "no_thermal_signal")
 """Bits saying a number is NaN or may be wrong."""
 
 CALIBRATION = (
@@ -140,6 +150,7 @@ CALIBRATION = (
     "elevation_out_of_range",
     "q_out_of_range",
     "niirs_out_of_scale",
+    "target_not_standard",
 )
 """Bits saying a number is outside a GIQE's calibration (or off the NIIRS scale)."""
 
@@ -148,10 +159,10 @@ NOTICE = ("atmosphere_sparse", "well_fill_limited", "partial_spectral_coverage",
 """Bits that are neither: information about how a number was obtained."""
 
 INVALID_MASK = sum(FLAGS[name][0] for name in INVALID)
-"""OR of the :data:`INVALID` bits (907905)."""
+"""OR of the :data:`INVALID` bits (3005057)."""
 
 CALIBRATION_MASK = sum(FLAGS[name][0] for name in CALIBRATION)
-"""OR of the :data:`CALIBRATION` bits (1400)."""
+"""OR of the :data:`CALIBRATION` bits (4195704)."""
 
 
 def flag(name: str) -> int:

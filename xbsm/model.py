@@ -1,4 +1,4 @@
-"""The public doors of the model chain: ``snr``, ``niirs`` and ``system_otf``.
+"""The public doors of the model chain: ``snr``, ``netd``, ``niirs`` and ``system_otf``.
 
 Each checks its inputs, resolves the method and enters :mod:`xbsm._chain`, which
 composes the stages (parameters -> atmosphere -> radiometry -> noise -> (OTF ->
@@ -8,17 +8,30 @@ dimension of the inputs is kept.
 
 from __future__ import annotations
 
+import numpy as np
 import xarray as xr
 
-from . import _chain, metrics
+from . import _chain, metrics, params
 from .methods import method as resolve_method
-from .params import Choice, Resolved, check_inputs, contract
-from .radiometry import TARGETS
+from .params import Choice, Either, Instance, Resolved, check_inputs, contract
+from .radiometry import TARGETS, check_target_set, targets_on_scenario
 
 _METHOD = Resolved(resolve_method)
+_TARGETS = Either(Choice(TARGETS), Instance(xr.Dataset, "a target set from "
+                                            "xbsm.radiometry.target_set(...)"))
 
 
-@contract(method=_METHOD, targets=Choice(TARGETS))
+def _targets(sensor: xr.Dataset, scenario: xr.Dataset, targets):
+    """Checked inputs, with a target set's targets put on the scenario's background."""
+    check_inputs(sensor, scenario)
+    if isinstance(targets, str):
+        return scenario, targets
+    scenario = targets_on_scenario(scenario, check_target_set("targets", targets))
+    check_inputs(sensor, scenario)  # each target's reflectance in [0, 1]
+    return scenario, "scenario"
+
+
+@contract(method=_METHOD, targets=_TARGETS)
 def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets="giqe"):
     """Contrast signal-to-noise ratio and its breakdown (paper Sec. 2.2-2.3, Figure 4).
 
@@ -30,11 +43,13 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
         From :func:`xbsm.scenario`.
     method : str or Method
         "accurate" (default), "fast" or "pybsm", or a :class:`xbsm.methods.Method`.
-    targets : {"giqe", "scenario"}
+    targets : {"giqe", "scenario"} or xr.Dataset
         "giqe": the GIQE standard target and background (15% / 7% at 282 K /
         280 K; reflectance 0 in bands starting at or beyond 2.9 um), as the
         NIIRS chain uses; "scenario": the scenario's own reflectances and
-        temperatures.
+        temperatures; or a target set (:func:`xbsm.radiometry.target_set`,
+        :func:`xbsm.radiometry.standard_targets`): each target on the scenario's
+        background, over dim ``target``.
 
     Returns
     -------
@@ -48,12 +63,71 @@ def snr(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, targets=
         spectral photoelectron rate, which weights the OTFs, paper Eq. 3) and
         ``flags``.
     """
-    check_inputs(sensor, scenario)
+    scenario, targets = _targets(sensor, scenario, targets)
     return _chain.snr(sensor, scenario, method, targets)
 
 
-@contract(method=_METHOD, calibration=Resolved(metrics.giqe_calibrations))
-def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibration=None):
+@contract(method=_METHOD)
+def netd(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, temperature=300.0,
+         reflectance=0.0):
+    """Noise-equivalent temperature difference, radiance and irradiance of a uniform scene.
+
+    The temperature difference of the scene that gives a contrast SNR of 1 (after frame
+    stacking, as :func:`snr`'s): the SNR chain's total noise over the temperature
+    derivative of the scene's photoelectrons, both at ``temperature``.
+
+    Parameters
+    ----------
+    sensor : xr.Dataset
+        From :func:`xbsm.sensor`.
+    scenario : xr.Dataset
+        From :func:`xbsm.scenario`: the path (its transmission, path radiance and
+        scattered sunlight); its own target and background are replaced by the scene.
+    method : str or Method
+        "accurate" (default), "fast" or "pybsm", or a :class:`xbsm.methods.Method`.
+    temperature : float, array_like or xr.DataArray
+        Scene temperature, in (0, inf); a 1-D sequence sweeps on dim ``temperature``. [K]
+    reflectance : float or xr.DataArray
+        Scene reflectance in [0, 1]; its emissivity is 1 - ``reflectance`` (default 0:
+        a blackbody). [1]
+
+    Returns
+    -------
+    xr.Dataset
+        ``netd`` and ``netd_frame`` [K]; ``ner``, the noise-equivalent band radiance at
+        the aperture, and ``ner_target``, leaving the scene [W m-2 sr-1]; ``nei``, the
+        noise-equivalent band irradiance at the entrance pupil [W m-2];
+        ``signal_derivative`` [count K-1]; the scene's ``target_photoelectrons``,
+        ``effective_integration_time``, ``well_fill``, every noise term and
+        ``spectral_weights`` as :func:`snr` gives them; ``flags``
+        (``well_fill_limited`` where the integration time was shortened,
+        ``no_thermal_signal`` where the signal does not grow with temperature).
+
+    Notes
+    -----
+    The noise is the chain's total (:func:`xbsm.noise.noise_terms`): shot noise of the
+    scene's photoelectrons, which include the path radiance, scattered sunlight,
+    the sensor's self-emission and stray light, and dark current; quantization, read and
+    other noise; :func:`xbsm.radiometry.noise_equivalent_terms` gives the formulas.
+    NER and NEI are the band-integrated radiance and irradiance changes, with the
+    spectral shape of the Planck derivative at ``temperature``, that give SNR 1.
+    """
+    if not isinstance(temperature, xr.DataArray) and np.ndim(temperature):
+        temperature = params.labelled("temperature", temperature, "temperature")
+    temperature = params.argument("temperature", temperature, ("temperature",))
+    reflectance = params.argument("reflectance", reflectance)
+    check_inputs(sensor, scenario)
+    scene = {"target_temperature": temperature, "background_temperature": temperature,
+             "target_reflectance": reflectance, "background_reflectance": reflectance}
+    scenario = scenario.assign({name: value.assign_attrs(scenario[name].attrs)
+                                for name, value in scene.items()})
+    check_inputs(sensor, scenario)
+    return _chain.netd(sensor, scenario, method)
+
+
+@contract(method=_METHOD, calibration=Resolved(metrics.giqe_calibrations), targets=_TARGETS)
+def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibration=None,
+          targets="giqe"):
     """Predicted NIIRS by GIQE 3, 4 and 5 with every intermediate (paper Sec. 3).
 
     Parameters
@@ -68,6 +142,11 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
         GIQE calibration ranges for the flags, by version, e.g.
         ``{5: xbsm.metrics.GIQE5_CALIBRATION.replace(snr=(2, 130))}``; versions
         left out keep :data:`xbsm.metrics.GIQE_CALIBRATIONS`. Changes flags only.
+    targets : {"giqe", "scenario"} or xr.Dataset
+        Whose contrast SNR the GIQE reads, as for :func:`snr`. Default the GIQE's
+        standard target, on which the GIQE was fitted; any other target (the
+        scenario's, where it differs from the standard, or a target set) sets
+        ``target_not_standard``, a calibration flag, on every ``giqe``.
 
     Returns
     -------
@@ -91,8 +170,8 @@ def niirs(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, calibr
     without the post-processing filter (as pyBSM's ``niirs5``), GIQE 3 and 4
     with it, with its noise gain.
     """
-    check_inputs(sensor, scenario)
-    return _chain.niirs(sensor, scenario, method, calibration)
+    scenario, targets = _targets(sensor, scenario, targets)
+    return _chain.niirs(sensor, scenario, method, calibration, targets)
 
 
 @contract(method=_METHOD)

@@ -426,9 +426,10 @@ RESULT_NAMES = (
     "eho_x", "eho_y", "rer", "eho", "coherence_diameter", "cutoff_frequency", "rer_giqe5",
     "gsd", "gsd_gp", "gsd_w", "noise_gain", "slant_range", "elevation_angle", "flags",
     "spectral_weights", "aperture", "turbulence", "detector", "jitter", "drift", "wavefront",
-    "filter", "system_unfiltered", "system",
+    "filter", "system_unfiltered", "system", "netd", "netd_frame", "ner", "ner_target", "nei",
+    "signal_derivative",
 )
-"""Variables of the results of ``snr``, ``niirs`` and ``system_otf``: a sweep dimension of
+"""Variables of the results of ``snr``, ``netd``, ``niirs`` and ``system_otf``: a sweep dimension of
 one of these names would replace the variable by its coordinate (a parameter the result
 echoes under its own name, ``read_noise`` and ``other_noise``, may sweep on it)."""
 

@@ -1015,3 +1015,280 @@ def reflectance_counts_arrays(target_rate, spectral_weights, dark_current, integ
             "effective_integration_time": integration_time * scale,
             "spectral_weights": brightest / np.fmax.reduce(brightest, axis=-1, keepdims=True),
             "well_fill_scale": scale}
+
+
+# ---- noise-equivalent temperature difference, radiance and irradiance --------------------
+
+def _blackbody_derivative_kernel(wavelength, temperature, *, h, c, k):
+    """Temperature derivative of Planck's law, dL/dT = L (x / T) / (1 - e^-x)."""
+    x = h * c / (wavelength * k * temperature)
+    radiance = _blackbody_kernel(wavelength, temperature, h=h, c=c, k=k)
+    return radiance * (x / temperature) / -np.expm1(-x)
+
+
+_SENSITIVITY = ("wavelength", "quantum_efficiency", "detector_width_x", "detector_width_y",
+                "optics_transmission", "transmission", "target_reflectance",
+                "target_temperature", "focal_length", "aperture_diameter")
+_NOISE_EQUIVALENT = (*_SENSITIVITY, "effective_integration_time", "tdi_stages",
+                     "total_noise")
+SENSITIVITY_OUTPUTS = outputs(
+    Output("signal_derivative", "count K-1",
+           "temperature derivative of the target photoelectrons of one frame",
+           inputs=(*_SENSITIVITY, "effective_integration_time", "tdi_stages")),
+    Output("netd_frame", "K", "single-frame noise-equivalent temperature difference",
+           inputs=_NOISE_EQUIVALENT),
+    Output("netd", "K", "noise-equivalent temperature difference after frame stacking",
+           inputs=(*_NOISE_EQUIVALENT, "frame_stacks")),
+    Output("ner", "W m-2 sr-1",
+           "noise-equivalent band radiance at the aperture after frame stacking",
+           inputs=(*_NOISE_EQUIVALENT, "frame_stacks")),
+    Output("ner_target", "W m-2 sr-1",
+           "noise-equivalent band radiance leaving the target after frame stacking",
+           inputs=(*_NOISE_EQUIVALENT, "frame_stacks")),
+    Output("nei", "W m-2",
+           "noise-equivalent band irradiance at the entrance pupil after frame stacking",
+           inputs=(*_NOISE_EQUIVALENT, "frame_stacks")),
+)
+"""What :func:`sensitivity_arrays` and :func:`noise_equivalent_terms` return."""
+_SENSITIVITY_CORE = tuple(_BAND if name in _SENSITIVITY else ()  # the integrand's arguments
+                          for name in (*_NOISE_EQUIVALENT, "frame_stacks"))
+
+
+def sensitivity_inputs(sensor, scenario, atm, band, signal, total_noise) -> tuple:
+    """The arguments of :func:`sensitivity_arrays`, in order.
+
+    From the sensor's and the scenario's parameters, the band atmosphere, the band terms
+    (:data:`BAND_OUTPUTS`) and the signal stage's outputs (each a mapping by name), and
+    the noise stage's ``total_noise``.
+    """
+    s, sc = sensor, scenario
+    return (atm["wavelength"], band["quantum_efficiency"], s["detector_width_x"],
+            s["detector_width_y"], band["optics_transmission"], atm["transmission"],
+            sc["target_reflectance"], sc["target_temperature"], s["focal_length"],
+            s["aperture_diameter"], signal["effective_integration_time"], s["tdi_stages"],
+            total_noise, s["frame_stacks"])
+
+
+def sensitivity_arrays(wavelength, quantum_efficiency, detector_width_x, detector_width_y,
+                       optics_transmission, transmission, target_reflectance,
+                       target_temperature, focal_length, aperture_diameter,
+                       effective_integration_time, tdi_stages, total_noise, frame_stacks,
+                       *, h, c, k) -> dict:
+    """:data:`SENSITIVITY_OUTPUTS` on plain arrays: NETD, NER and NEI of the target.
+
+    The target's temperature derivative of paper Eq. 1 (its emission, (1 - r) dL_bb/dT,
+    through the path transmission) goes through the same optics, detector and band
+    integral as its signal (:func:`signal_arrays`); the noise is the noise stage's
+    total. The spectral arguments vary along their last axis (or are constant).
+    """
+    emitted = (1.0 - target_reflectance) * _blackbody_derivative_kernel(
+        wavelength, target_temperature, h=h, c=c, k=k)  # at the target [W m-2 sr-1 m-1 K-1]
+    at_aperture = emitted * transmission
+    irradiance = optics_transmission * _focal_plane_kernel(at_aperture, focal_length,
+                                                           aperture_diameter)
+    rate = _rate_kernel(wavelength, quantum_efficiency, detector_width_x, detector_width_y,
+                        irradiance, h=h, c=c)  # [s-1 K-1]
+    derivative = rate * effective_integration_time * tdi_stages
+    with np.errstate(divide="ignore", invalid="ignore"):
+        netd_frame = total_noise / derivative
+    netd = netd_frame / np.sqrt(frame_stacks)
+    ner = netd * _trapezoid_kernel(at_aperture, wavelength)
+    # the pupil irradiance that, collected by the whole pupil (pi D^2 / 4, the obscuration
+    # is in the optics transmission) onto one detector, gives the photoelectrons of the
+    # radiance ner filling the detector's field (pi / (1 + 4 F^2) its throughput)
+    # (on the wavelength axis: the sensor's band arguments come with a length-1 one)
+    pupil = 4.0 * detector_width_x * detector_width_y / (aperture_diameter**2.0
+                                                         + 4.0 * focal_length**2.0)
+    nei = netd * _trapezoid_kernel(at_aperture * pupil, wavelength)
+    return {"signal_derivative": derivative, "netd_frame": netd_frame, "netd": netd,
+            "ner": ner, "ner_target": netd * _trapezoid_kernel(emitted, wavelength),
+            "nei": nei}
+
+
+def noise_equivalent_terms(sensor: xr.Dataset, scenario: xr.Dataset, atmosphere: xr.Dataset,
+                           band: xr.Dataset, signal: xr.Dataset, total_noise,
+                           constants=CODATA) -> xr.Dataset:
+    r"""Noise-equivalent temperature difference, radiance and irradiance of the target.
+
+    Parameters
+    ----------
+    sensor, scenario : xr.Dataset
+        From :func:`xbsm.sensor` and :func:`xbsm.scenario` (the target's reflectance and
+        temperature).
+    atmosphere : xr.Dataset
+        Atmosphere over the band (its ``transmission``).
+    band : xr.Dataset
+        From :func:`sensor_band_terms`.
+    signal : xr.Dataset
+        From :func:`signal_terms` (its ``effective_integration_time``).
+    total_noise : xr.DataArray
+        From :func:`xbsm.noise.noise_terms`. [count]
+    constants : Constants
+        Physical constants.
+
+    Returns
+    -------
+    xr.Dataset
+        ``signal_derivative`` [count K-1], ``netd_frame`` and ``netd`` [K], ``ner`` (at
+        the aperture) and ``ner_target`` (leaving the target) [W m-2 sr-1], ``nei`` (at
+        the entrance pupil) [W m-2].
+
+    Notes
+    -----
+    .. math:: \mathrm{NETD} = \frac{\sigma}{\sqrt{n_f}\,\partial N / \partial T},\qquad
+       \frac{\partial N}{\partial T} = t\,n_{TDI}\int \frac{\lambda}{hc}\,\eta\,w_x w_y\,
+       \tau_o \frac{\pi}{1 + 4F^2}\,\tau_a (1 - r)\frac{\partial L_{bb}}{\partial T}\,
+       d\lambda
+
+    with :math:`\sigma` the total noise, :math:`n_f` the frame stacks; NER is NETD times
+    the band integral of :math:`\tau_a (1 - r)\,\partial L_{bb}/\partial T` (without
+    :math:`\tau_a` at the target), NEI is NER times
+    :math:`4 w_x w_y / (D^2 + 4 f^2)`.
+    """
+    return dataset(apply_orchestrator(
+        sensitivity_arrays, SENSITIVITY_OUTPUTS,
+        *sensitivity_inputs(sensor, scenario, atmosphere, band, signal, total_noise),
+        core=_SENSITIVITY_CORE, **planck_knobs(constants)))
+
+
+# ---- targets: the GIQE's standard one, the scenario's, or a set of one's own --------------
+
+TARGET_SETS = MappingProxyType({
+    "nato_image_intensifier_gen2": MappingProxyType({
+        "characteristic_dimension": 2.3, "thermal_contrast": 0.0, "reflectance_contrast": 0.25,
+        "source": "NATO STANAG on the nominal static range of image intensifier systems, "
+                  "para. 6 (target 2.3 x 2.3 m, initial contrast C0 = 0.25 for 2nd "
+                  "generation), as reproduced at https://nippon.zaidan.info/seikabutsu/1998/"
+                  "00222/contents/099.htm"}),
+    "nato_image_intensifier_gen3": MappingProxyType({
+        "characteristic_dimension": 2.3, "thermal_contrast": 0.0, "reflectance_contrast": 0.4,
+        "source": "as nato_image_intensifier_gen2 (C0 = 0.4 for 3rd generation)"}),
+    "imo_night_vision": MappingProxyType({
+        "characteristic_dimension": 1.5**0.5, "thermal_contrast": 1.0,
+        "reflectance_contrast": 0.25,
+        "source": "IMO performance standard for night vision equipment for high-speed craft, "
+                  "5.2.6 (target 1.5 m high x 1 m wide; contrast at most 0.25 in the visual "
+                  "and near infrared, temperature difference at most 1 K), as reproduced at "
+                  "https://nippon.zaidan.info/seikabutsu/1998/00226/contents/021.htm"}),
+})
+"""Published standard targets: characteristic dimension sqrt(area) [m], thermal contrast
+(target minus background temperature) [K], reflectance contrast (Weber contrast of the
+reflectances, (r_t - r_b) / r_b, the standards' initial contrast read so) [1], and the
+source. :func:`target_set` makes a set of one's own."""
+
+_TARGET_SPECS = MappingProxyType({
+    "characteristic_dimension": ("m", "target characteristic dimension, sqrt(area)", 0.0),
+    "thermal_contrast": ("K", "target minus background temperature", -np.inf),
+    "reflectance_contrast": ("1", "target reflectance contrast (r_t - r_b) / r_b", -1.0),
+})
+
+
+def target_set(characteristic_dimension, thermal_contrast=0.0, reflectance_contrast=0.0, *,
+               names=None) -> xr.Dataset:
+    """A set of targets as data, on dim ``target``: for ``targets=`` of snr and niirs.
+
+    Parameters
+    ----------
+    characteristic_dimension : float or array_like
+        Square root of the target's area, in (0, inf). [m]
+    thermal_contrast : float or array_like
+        Target temperature minus the background's (the scenario's
+        ``background_temperature``), finite. [K]
+    reflectance_contrast : float or array_like
+        Weber contrast of the reflectances, (r_t - r_b) / r_b, in [-1, inf), with r_b the
+        scenario's ``background_reflectance``. [1]
+    names : sequence of str, optional
+        The targets' names (the ``target`` coordinate); default 0, 1, ...
+
+    Returns
+    -------
+    xr.Dataset
+        ``characteristic_dimension``, ``thermal_contrast``, ``reflectance_contrast`` over
+        ``target``, each with ``units`` and ``long_name``.
+    """
+    values = {"characteristic_dimension": characteristic_dimension,
+              "thermal_contrast": thermal_contrast, "reflectance_contrast": reflectance_contrast}
+    arrays = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, dtype=float))
+                                   for v in values.values()))
+    for (name, (units, _, low)), array in zip(_TARGET_SPECS.items(), arrays, strict=True):
+        if array.ndim != 1:
+            raise ValueError(f"{name} must be a number or a 1-D sequence; got shape "
+                             f"{array.shape}")
+        bad = ~np.isfinite(array) | (array <= low if name == "characteristic_dimension"
+                                     else array < low)
+        if np.any(bad):
+            interval = "(0, inf)" if low == 0.0 else f"[{low:g}, inf)"
+            raise ValueError(f"{name} must be finite and lie in {interval} {units}; got "
+                             f"{array[bad][0]!r}")
+    labels = list(range(arrays[0].size)) if names is None else list(names)
+    if len(labels) != arrays[0].size:
+        raise ValueError(f"names must give one name per target ({arrays[0].size}); got "
+                         f"{len(labels)}")
+    return xr.Dataset(
+        {name: ("target", array, {"units": units, "long_name": long_name})
+         for (name, (units, long_name, _)), array in zip(_TARGET_SPECS.items(), arrays,
+                                                           strict=True)},
+        coords={"target": labels}, attrs={"xbsm_kind": "target_set"})
+
+
+def standard_targets(*names: str) -> xr.Dataset:
+    """The published standard targets of :data:`TARGET_SETS` (all by default) as a set.
+
+    Parameters
+    ----------
+    *names : str
+        Keys of :data:`TARGET_SETS`.
+
+    Returns
+    -------
+    xr.Dataset
+        As :func:`target_set`, with each target's ``source`` as a coordinate.
+    """
+    names = names or tuple(TARGET_SETS)
+    unknown = [n for n in names if n not in TARGET_SETS]
+    if unknown:
+        raise ValueError(f"target set names must be among {sorted(TARGET_SETS)}; got "
+                         f"{unknown[0]!r}")
+    rows = [TARGET_SETS[n] for n in names]
+    out = target_set(*([row[key] for row in rows] for key in _TARGET_SPECS), names=names)
+    return out.assign_coords(source=("target", [row["source"] for row in rows]))
+
+
+def check_target_set(name: str, value) -> xr.Dataset:
+    """``value`` if it is a target set (:func:`target_set`), else a ValueError naming ``name``."""
+    if not (isinstance(value, xr.Dataset) and value.attrs.get("xbsm_kind") == "target_set"):
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, TARGETS))} or a target "
+                         "set from xbsm.radiometry.target_set(...) or standard_targets(...); "
+                         f"got {type(value).__name__}")
+    return value
+
+
+def targets_on_scenario(scenario: xr.Dataset, targets: xr.Dataset) -> xr.Dataset:
+    """The scenario with each target of a set on its background, over dim ``target``.
+
+    The target's temperature is the background's plus the thermal contrast, its
+    reflectance the background's times one plus the reflectance contrast; the background
+    stays the scenario's.
+    """
+    out = scenario.assign(
+        target_temperature=scenario["background_temperature"] + targets["thermal_contrast"],
+        target_reflectance=scenario["background_reflectance"]
+        * (1.0 + targets["reflectance_contrast"]))
+    for name in ("target_temperature", "target_reflectance"):
+        out[name].attrs = dict(scenario[name].attrs)
+    return out
+
+
+def standard_target(targets: str, wavelength_min, scenario):
+    """Whether the target and background are the GIQE's standard ones (:func:`surfaces`).
+
+    True for ``"giqe"``; for ``"scenario"``, where the scenario's four values equal the
+    standard's (the emissive convention from :data:`EMISSIVE_BAND_START`). [bool]
+    """
+    if targets == "giqe":
+        return np.True_
+    given = surfaces(targets, wavelength_min, scenario)
+    standard = surfaces("giqe", wavelength_min, scenario)
+    same = [value == expected for pair, reference in zip(given, standard, strict=True)
+            for value, expected in zip(pair, reference, strict=True)]
+    return same[0] & same[1] & same[2] & same[3]
