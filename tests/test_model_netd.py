@@ -11,9 +11,9 @@ import dask.array as dsa
 import numpy as np
 import pytest
 import xarray as xr
-from scipy import constants as const
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy import constants as const
 from scipy.integrate import quad
 
 import xbsm

@@ -9,7 +9,6 @@ and 3 of the paper).
 from __future__ import annotations
 
 import textwrap
-
 from dataclasses import dataclass
 
 import numpy as np
