@@ -201,3 +201,16 @@ def _sc(**kw):
 def test_bad_profiles_are_refused_naming_the_parameter(kw, match):
     with pytest.raises(ValueError, match=match):
         xbsm.scenario(**_sc(**kw))
+
+
+def test_a_study_file_sweeps_the_multiplier_lazily(tmp_path):
+    from xbsm import study
+
+    path = tmp_path / "cn2.toml"
+    path.write_text('[sensor]\npreset = "olson"\nband = "nir"\n[scenario]\n'
+                    "platform_speed = 100.0\naltitude = 9000.0\nvisibility = 23.0\n"
+                    "ground_range = 15000.0\n[sweep]\ncn2_multiplier = [0.3, 1.0, 10.0]\n")
+    result = study.run(study.load(path))
+    assert result["niirs"].chunks is not None
+    niirs = result["niirs"].transpose(..., "cn2_multiplier").values
+    assert np.all(np.diff(niirs, axis=-1) < 0)
