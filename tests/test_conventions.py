@@ -190,6 +190,7 @@ NOT_LABELLED = MappingProxyType({
                     "motion.drift_kernel", "motion.jitter_kernel",
                     "spectral.weighted_sum_kernel", "turbulence.band_kernel",
                     "turbulence.polychromatic_kernel", "turbulence.slant_path_kernel",
+                    "turbulence.table_kernel",
                     "wavefront.random_phase_kernel")},
     **{f"xbsm.{name}": "a stage's array orchestrator: plain arrays in and out, labelled by "
        "xbsm._chain from the stage's declared outputs (tests/test_chain.py)"

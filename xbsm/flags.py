@@ -9,7 +9,8 @@ Every bit belongs to one of three groups, so that one test answers the
 question a user has:
 
 - :data:`INVALID`: the number is NaN or may be wrong (no atmosphere data, SNR
-  at or below zero, a frequency grid too coarse for the edge integral).
+  at or below zero, a frequency grid too coarse for the edge integral, the
+  database's inconsistent tables above 24.5 km).
   Test with :func:`is_invalid`.
 - :data:`CALIBRATION`: the number is computed correctly, but a GIQE is used
   outside the range of images it was fitted or validated on (per version:
@@ -136,11 +137,19 @@ FLAGS = MappingProxyType({
         "the target is not GIQE's standard one (15% / 7% at 282 K / 280 K): the GIQE was "
         "fitted on imagery rated against that SNR convention, not on this target",
     ),
+    "atmosphere_inconsistent": (
+        8388608,
+        f"altitude above {ALTITUDE_GAP[0] / 1e3:g} km: the database's only higher table "
+        f"({ALTITUDE_GAP[1] / 1e3:g} km, nadir) is inconsistent with the {ALTITUDE_GAP[0] / 1e3:g} "
+        "km one (GRND_RFLT 1.65-1.88x, SOL_SCAT 1.30-1.61x, TRANS within 1.5 %): "
+        "radiometric results may be wrong (contrast SNR 16-22 % too high at 100 km and "
+        "37-55 % at 549 km for a camera that does not fill its well)",
+    ),
 })
 
 INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive", "rer_nonpositive",
            "blur_unresolved", "grd_unresolved", "upsampled", "image_nonfinite", "image_small",
-           "reference_unresolved", "no_thermal_signal")
+           "reference_unresolved", "no_thermal_signal", "atmosphere_inconsistent")
 """Bits saying a number is NaN or may be wrong."""
 
 CALIBRATION = (
@@ -159,7 +168,7 @@ NOTICE = ("atmosphere_sparse", "well_fill_limited", "partial_spectral_coverage",
 """Bits that are neither: information about how a number was obtained."""
 
 INVALID_MASK = sum(FLAGS[name][0] for name in INVALID)
-"""OR of the :data:`INVALID` bits (3005057)."""
+"""OR of the :data:`INVALID` bits (11393665)."""
 
 CALIBRATION_MASK = sum(FLAGS[name][0] for name in CALIBRATION)
 """OR of the :data:`CALIBRATION` bits (4195704)."""

@@ -405,14 +405,27 @@ SCENARIO_SPECS: dict[str, Spec] = {
     "cn2_at_1m": Spec(
         "m-2/3", "refractive-index structure parameter 1 m above ground", **NONNEGATIVE
     ),
+    "cn2_tropopause": Spec(
+        "m-2/3", "coefficient of the Hufnagel-Valley tropopause term (height in metres)",
+        **NONNEGATIVE
+    ),
+    "cn2_upper_air": Spec(
+        "m-2/3", "coefficient of the Hufnagel-Valley 1.5 km scale-height term", **NONNEGATIVE
+    ),
+    "cn2_multiplier": Spec("1", "multiplier of the whole Cn2 profile", **NONNEGATIVE),
 }
+
+PROFILE_DEFAULTS = MappingProxyType({
+    "high_altitude_wind_speed": 21.0, "cn2_at_1m": 1.7e-14, "cn2_tropopause": 5.94e-53,
+    "cn2_upper_air": 2.7e-16})
+"""Hufnagel-Valley 5/7, the defaults of :func:`scenario` (a ``cn2_profile`` replaces it)."""
 
 
 #: Dimension names xbsm uses itself; a sweep dimension may not take one of them (it would
 #: merge silently with xbsm's own axis), nor the name of another parameter.
 RESERVED_DIMS = (
     "wavelength", "frequency", "orientation", "giqe", "fx", "fy", "x", "y", "component",
-    "kernel_x", "kernel_y", "reflectance", "path", "position", "bin",
+    "kernel_x", "kernel_y", "reflectance", "path", "position", "bin", "height",
     *(f"{name}_wavelength" for name in ("optics_transmission", "quantum_efficiency",
                                           "stray_irradiance")),
 )
@@ -848,6 +861,10 @@ def scenario(
     background_temperature=293.0,
     high_altitude_wind_speed=21.0,
     cn2_at_1m=1.7e-14,
+    cn2_tropopause=5.94e-53,
+    cn2_upper_air=2.7e-16,
+    cn2_multiplier=1.0,
+    cn2_profile=None,
 ) -> xr.Dataset:
     """Imaging geometry, atmosphere and target as a validated dataset.
 
@@ -871,6 +888,21 @@ def scenario(
     cn2_at_1m : float or xr.DataArray
         Refractive-index structure parameter near the ground; 1.7e-14 is HV 5/7;
         0 switches turbulence off. [m^-2/3]
+    cn2_tropopause : float or xr.DataArray
+        Coefficient of the Hufnagel-Valley tropopause term
+        :math:`(v/27)^2 h^{10} e^{-h/1000}` (``h`` in metres); 5.94e-53 is HV 5/7. [m^-2/3]
+    cn2_upper_air : float or xr.DataArray
+        Coefficient of the Hufnagel-Valley term :math:`e^{-h/1500}`; 2.7e-16 is HV 5/7.
+        [m^-2/3]
+    cn2_multiplier : float or xr.DataArray
+        Factor of the whole Cn2 profile (Hufnagel-Valley or ``cn2_profile``); 0 switches
+        turbulence off. [1]
+    cn2_profile : xr.DataArray, optional
+        A table of Cn2 [m^-2/3] over a ``height`` coordinate [m] (from 0 m, strictly
+        increasing, up to at least the sensor altitude; values >= 0), interpolated
+        log-linearly along the path in place of Hufnagel-Valley
+        (:func:`xbsm.otf.turbulence.cn2_table`). The Hufnagel-Valley parameters must
+        then keep their defaults. Stored as the variable ``cn2_profile``.
 
     Returns
     -------
@@ -879,6 +911,8 @@ def scenario(
     """
     given = dict(locals())
     values = {name: _validated(name, given[name], spec) for name, spec in SCENARIO_SPECS.items()}
+    if cn2_profile is not None:
+        values["cn2_profile"] = _profile_table(values, cn2_profile)
     vis = values["visibility"]
     if vis.chunks is None:
         unknown = ~np.isin(vis.values, VISIBILITIES)
@@ -888,6 +922,76 @@ def scenario(
                 f"got {vis.values[unknown].ravel()[0]!r}"
             )
     return _finish(values, "scenario")
+
+
+def cn2_table(cn2_profile):
+    """Validate a user table of :math:`C_n^2` over height; returns it as float64.
+
+    Parameters
+    ----------
+    cn2_profile : xr.DataArray
+        1-D over a ``height`` dimension whose coordinate is the height above the
+        ground, strictly increasing, from 0 m or below; values finite and >= 0, at
+        least two heights. Between heights :math:`C_n^2` is interpolated linearly in its
+        logarithm (linearly where a neighbour is 0); above the last height the table
+        refuses the path. [m^(-2/3)]
+
+    Returns
+    -------
+    xr.DataArray
+        The checked table, float64. [m^(-2/3)]
+    """
+    if not isinstance(cn2_profile, xr.DataArray) or cn2_profile.dims != ("height",) \
+            or "height" not in cn2_profile.coords:
+        raise ValueError("cn2_profile must be a 1-D xr.DataArray over dim 'height' with a "
+                         "height coordinate [m] (Cn2 in m-2/3)")
+    h = np.asarray(cn2_profile["height"].values, dtype=float)
+    c = np.asarray(cn2_profile.values, dtype=float)
+    if h.size < 2:
+        raise ValueError(f"cn2_profile must have at least 2 heights; got {h.size}")
+    if not np.all(np.isfinite(h)) or not np.all(np.diff(h) > 0):
+        raise ValueError("cn2_profile heights must be finite and strictly increasing [m]; "
+                         f"got {h.tolist()[:6]}")
+    if h[0] > 0.0:
+        raise ValueError("cn2_profile heights must start at or below 0 m (the target on the "
+                         f"ground) to cover the path; got first height {h[0]!r}")
+    bad = ~np.isfinite(c) | (c < 0.0)
+    if np.any(bad):
+        raise ValueError("cn2_profile values must lie in [0, inf) m-2/3; got "
+                         f"{c[bad][0]!r} at height {h[bad][0]!r} m")
+    if not np.any(c > 0.0):
+        raise ValueError("cn2_profile must have a Cn2 > 0 somewhere; to switch turbulence "
+                         "off set cn2_multiplier=0")
+    out = xr.DataArray(c, dims="height", coords={"height": h},
+                       attrs={"units": "m-2/3",
+                              "long_name": "refractive-index structure parameter table"})
+    out["height"].attrs.update(units="m", long_name="height above the ground")
+    return out
+
+
+def table_values(table: xr.DataArray):
+    """(heights, Cn2) of a checked :func:`cn2_table` as read-only arrays (for the kernels)."""
+    out = (np.array(table["height"].values, dtype=float), np.array(table.values, dtype=float))
+    for a in out:
+        a.flags.writeable = False
+    return out
+
+
+def _profile_table(values: dict, cn2_profile) -> xr.DataArray:
+    """The checked ``cn2_profile``: HV parameters at their defaults, covering the altitudes."""
+    for name, default in PROFILE_DEFAULTS.items():
+        v = values[name]
+        if v.ndim or v.chunks is not None or float(v.values) != default:
+            raise ValueError(
+                f"{name} is a Hufnagel-Valley parameter and cn2_profile replaces that profile: "
+                f"leave {name} at its default {default!r} (scale a table with cn2_multiplier)")
+    table = cn2_table(cn2_profile)
+    altitude = values["altitude"]
+    if altitude.chunks is None and float(altitude.max()) > float(table["height"][-1]):
+        raise ValueError(
+            "cn2_profile must cover the path: heights up to at least the highest altitude "
+            f"{float(altitude.max())!r} m; its last height is {float(table['height'][-1])!r} m")
+    return table
 
 
 #: Arguments of model calls that are not sensor or scenario parameters.

@@ -189,7 +189,9 @@ def test_every_interpolation_returns_database_nodes_exactly(db, interpolation):
     for c, name in enumerate(atm.VARIABLES):
         assert np.array_equal(result[name].transpose(dim, "wavelength").values,
                               expected[:, c])
-    assert (result["flags"] == 0).all()
+    # only the 550 km tables are flagged: inconsistent with the 24.5 km ones
+    inconsistent = np.where(db.altitude[a] > 24.5e3, FLAGS["atmosphere_inconsistent"][0], 0)
+    assert np.array_equal(result["flags"].values, inconsistent)
 
 
 def test_linear_reproduces_pybsm_load_database_atmosphere_bit_for_bit():
@@ -558,7 +560,8 @@ def test_altitudes_above_24_5_km_interpolate_only_at_ground_range_zero(db):
     assert np.array_equal(t[2], db.cube[0, -1, 0, 0].astype(float))  # 550 km node
     assert np.isnan(t[3]).all()
     sparse, beyond = FLAGS["atmosphere_sparse"][0], FLAGS["beyond_database"][0]
-    assert list(flags) == [sparse, sparse | beyond, 0, beyond]
+    bad = FLAGS["atmosphere_inconsistent"][0]  # every altitude above 24.5 km
+    assert list(flags) == [sparse | bad, sparse | beyond | bad, bad, beyond | bad]
 
 
 # --- atmosphere_at: errors -------------------------------------------------------------

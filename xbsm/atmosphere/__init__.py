@@ -63,7 +63,9 @@ At a database node every option returns the stored value exactly. Where a
 bracketing table is missing (beyond the horizon of the lower altitude, or above
 ground range 0 between 24.5 km and 550 km) the spectra are NaN and the
 ``beyond_database`` flag is set. Altitudes strictly between 24.5 km and 550 km
-are interpolated only at ground range 0 and carry the ``atmosphere_sparse`` flag.
+are interpolated only at ground range 0 and carry the ``atmosphere_sparse`` flag; every
+altitude above 24.5 km carries the invalid ``atmosphere_inconsistent`` flag (the 550 km
+tables are not a continuation of the 24.5 km ones: ``docs/atmosphere.md``).
 """
 
 import importlib

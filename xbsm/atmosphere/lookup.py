@@ -142,6 +142,8 @@ def _flags_of(scenarios):
     out = np.where(complete, 0, flag("beyond_database"))
     sparse = (altitude > ALTITUDE_GAP[0]) & (altitude < ALTITUDE_GAP[1])
     out |= np.where(sparse, flag("atmosphere_sparse"), 0)
+    # the 550 km tables are not a continuation of the 24.5 km ones (docs/atmosphere.md)
+    out |= np.where(altitude > ALTITUDE_GAP[0], flag("atmosphere_inconsistent"), 0)
     if along is not None:
         fallback = complete & ~along.usable & (altitude <= ALTITUDE_GAP[0])
         out |= np.where(fallback, flag("atmosphere_fallback"), 0)
@@ -287,8 +289,9 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation=None,
         ``solar_scatter``, ``ground_reflected`` [W m-2 sr-1 m-1] on the union of
         the input dimensions plus ``wavelength``, and int32 ``flags`` (CF flag
         variable; ``beyond_database`` where the spectra are NaN,
-        ``atmosphere_sparse`` between 24.5 km and 550 km, ``atmosphere_fallback``
-        where a line-of-sight rule fell back to ``"log-linear"``).
+        ``atmosphere_sparse`` between 24.5 km and 550 km, ``atmosphere_inconsistent``
+        above 24.5 km, ``atmosphere_fallback`` where a line-of-sight rule fell back
+        to ``"log-linear"``).
 
     Raises
     ------

@@ -33,6 +33,7 @@ RATE = Values(Spec("rad s-1", "angular drift rate"))
 DURATION = Values(Spec("s", "integration time", **params.NONNEGATIVE))
 SPEED = Values(Spec("m s-1", "wind speed", **params.NONNEGATIVE))
 CN2 = Values(Spec("m-2/3", "refractive-index structure parameter", **params.NONNEGATIVE))
+CN2_SCALE = Values(Spec("1", "multiplier of the Cn2 profile", **params.NONNEGATIVE))
 COUNT = Values(Spec("1", "count", **params.NONNEGATIVE))
 """A number of charge transfers."""
 POSITIVE_NUMBER = Values(Spec("1", "positive number", **params.POSITIVE))

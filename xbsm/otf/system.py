@@ -17,6 +17,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from .. import params
 from .._kernels import apply_kernel, dataset
 from .._metadata import named
 from ..methods import Method
@@ -168,18 +169,33 @@ def _otf(out: xr.DataArray, long_name: str) -> xr.DataArray:
 def _turbulence(s, sc, radial, wl, w, integration_time, slant_range, method: Method):
     """Polychromatic turbulence OTF and band r0: path r0 at 1 um, scaled, wind-blended, weighted.
 
-    Scenarios without turbulence (``cn2_at_1m`` = 0) get an OTF of 1 and an infinite r0.
+    Scenarios without turbulence (``cn2_at_1m`` = 0 or ``cn2_multiplier`` = 0) get an OTF
+    of 1 and an infinite r0.
     """
-    cn2 = sc["cn2_at_1m"]
+    cn2, multiplier = sc["cn2_at_1m"], sc["cn2_multiplier"]
     r0_ref = apply_kernel(_turbulent_path_kernel, sc["high_altitude_wind_speed"], slant_range,
-                       sc["altitude"], cn2,
+                       sc["altitude"], cn2, sc["cn2_tropopause"], sc["cn2_upper_air"],
+                       multiplier,
                        nodes=turbulence.path_nodes(method.turbulence_path_samples,
                                                     method.turbulence_path_rule),
-                       form=method.geometry)
-    otf = _spectral(_turbulence_band_kernel, cn2, radial, r0_ref, integration_time,
+                       form=method.geometry, profile=_profile(sc))
+    on = apply_kernel(_turbulent_kernel, cn2, multiplier, dtype=bool)
+    otf = _spectral(_turbulence_band_kernel, on, radial, r0_ref, integration_time,
                     s["tdi_stages"], sc["platform_speed"], s["aperture_diameter"], wl, w)
-    r0_band = _spectral(_band_r0_kernel, cn2, r0_ref, wl, w)
+    r0_band = _spectral(_band_r0_kernel, on, r0_ref, wl, w)
     return otf, r0_band
+
+
+def _profile(sc):
+    """(heights, Cn2) of the scenario's ``cn2_profile`` table, or None (Hufnagel-Valley)."""
+    if "cn2_profile" not in sc.variables:
+        return None
+    return params.table_values(params.cn2_table(sc["cn2_profile"]))
+
+
+def _turbulent_kernel(cn2, multiplier):
+    """Where the scenario has turbulence (numpy; ``cn2 > 0`` alone at multiplier 1)."""
+    return (cn2 > 0) & (multiplier > 0)
 
 
 def _last(a):
@@ -239,11 +255,15 @@ def _exposure_drift_kernel(drift_rate_x, integration_time, tdi_stages, fx, drift
     return motion.drift_kernel(drift_rate_x * exposure, fx, drift_rate_y * exposure, fy)
 
 
-def _turbulent_path_kernel(wind_speed, slant_range, altitude, cn2, *, nodes, form):
+def _turbulent_path_kernel(wind_speed, slant_range, altitude, cn2, tropopause=5.94e-53,
+                           upper_air=2.7e-16, multiplier=1.0, *, nodes, form, profile=None):
     """Path r0 at 1 um of a target on the ground; a stand-in Cn2 where there is none (numpy)."""
     cn2 = np.where(cn2 > 0, cn2, 1.0e-14)
+    multiplier = np.where(multiplier > 0, multiplier, 1.0)
     return turbulence.slant_path_kernel(turbulence.REFERENCE_WAVELENGTH, wind_speed,
-                                         slant_range, altitude, 0.0, cn2, nodes=nodes, form=form)
+                                         slant_range, altitude, 0.0, cn2, tropopause,
+                                         upper_air, multiplier, nodes=nodes, form=form,
+                                         profile=profile)
 
 
 def _turbulence_band_kernel(cn2, radial, r0_ref, integration_time, tdi_stages, speed, diameter,
@@ -348,12 +368,13 @@ def system_slice_arrays(p, nodes, wavelength, spectral_weights, integration_time
     """
     fx, fy = nodes[:, None] * [1.0, 0.0], nodes[:, None] * [0.0, 1.0]
     wl, w = _band_weights_arrays(spectral_weights, wavelength, method.otf_wavelengths)
-    cn2 = p["cn2_at_1m"]
     r0_ref = _turbulent_path_kernel(
-        p["high_altitude_wind_speed"], slant_range, p["altitude"], cn2,
+        p["high_altitude_wind_speed"], slant_range, p["altitude"], p["cn2_at_1m"],
+        p["cn2_tropopause"], p["cn2_upper_air"], p["cn2_multiplier"],
         nodes=turbulence.path_nodes(method.turbulence_path_samples,
                                      method.turbulence_path_rule),
         form=method.geometry)
+    cn2 = _turbulent_kernel(p["cn2_at_1m"], p["cn2_multiplier"])
     radial = [
         _aperture_band_kernel(nodes, p["aperture_diameter"], p["obscuration_ratio"],
                               p["defocus_opd"], wl, w,

@@ -9,11 +9,12 @@ import numpy as np
 from .._kernels import apply_kernel
 from .._metadata import described
 from ..geometry import altitude_along_path
-from ..params import Spec, Values, contract
+from ..params import Spec, Values, cn2_table, contract, table_values
 from ..quadrature import legendre_nodes
 from ._contracts import (
     APERTURE_DIAMETER,
     CN2,
+    CN2_SCALE,
     DURATION,
     LENGTH,
     SPEED,
@@ -47,8 +48,9 @@ PATH_RULES = ("trapezoid", "gauss-legendre")
 _BLOCK = 1 << 16
 
 
-@contract(cn2_at_1m=CN2)
-def hufnagel_valley(altitude, high_altitude_wind_speed=21.0, cn2_at_1m=1.7e-14):
+@contract(cn2_at_1m=CN2, cn2_tropopause=CN2, cn2_upper_air=CN2, cn2_multiplier=CN2_SCALE)
+def hufnagel_valley(altitude, high_altitude_wind_speed=21.0, cn2_at_1m=1.7e-14,
+                    cn2_tropopause=5.94e-53, cn2_upper_air=2.7e-16, cn2_multiplier=1.0):
     r"""Hufnagel-Valley refractive-index structure parameter profile.
 
     Parameters
@@ -56,9 +58,17 @@ def hufnagel_valley(altitude, high_altitude_wind_speed=21.0, cn2_at_1m=1.7e-14):
     altitude : float or xr.DataArray
         Height above the ground. [m]
     high_altitude_wind_speed : float or xr.DataArray
-        Root-mean-square high-altitude wind speed (21 for HV 5/7). [m/s]
+        Root-mean-square upper-air wind speed :math:`v` (21 for HV 5/7). [m/s]
     cn2_at_1m : float or xr.DataArray
-        Structure parameter near the ground, >= 0 (1.7e-14 for HV 5/7). [m^(-2/3)]
+        Coefficient :math:`A` of the surface term, >= 0 (1.7e-14 for HV 5/7). [m^(-2/3)]
+    cn2_tropopause : float or xr.DataArray
+        Coefficient :math:`T` of the tropopause term, >= 0 (5.94e-53 for HV 5/7, with
+        :math:`h` in metres). [m^(-2/3)]
+    cn2_upper_air : float or xr.DataArray
+        Coefficient :math:`U` of the 1.5 km scale-height term, >= 0 (2.7e-16 for HV 5/7).
+        [m^(-2/3)]
+    cn2_multiplier : float or xr.DataArray
+        Factor :math:`M` of the whole profile, >= 0 (1 for HV 5/7). [1]
 
     Returns
     -------
@@ -68,23 +78,32 @@ def hufnagel_valley(altitude, high_altitude_wind_speed=21.0, cn2_at_1m=1.7e-14):
     Notes
     -----
     Replaces IBSM Eqs. 3-6 to 3-8 (Roggemann and Welsh, Imaging Through
-    Turbulence, 1996), with :math:`h` the altitude and :math:`v` the wind speed:
+    Turbulence, 1996), with :math:`h` the altitude in metres and :math:`v` the wind
+    speed in m/s:
 
-    .. math:: C_n^2(h) = 5.94\times10^{-53}\left(\frac{v}{27}\right)^2 h^{10} e^{-h/1000}
-              + 2.7\times10^{-16} e^{-h/1500} + C_n^2(1\,\mathrm{m})\, e^{-h/100}
+    .. math:: C_n^2(h) = M\left[T\left(\frac{v}{27}\right)^2 h^{10} e^{-h/1000}
+              + U e^{-h/1500} + A e^{-h/100}\right]
+
+    At the defaults (HV 5/7) the zenith plane-wave r0 is 5.3 cm and the isoplanatic
+    angle 7.0 urad at 0.5 um (``docs/atmosphere.md``).
     """
-    out = apply_kernel(_hufnagel_valley_kernel, high_altitude_wind_speed, altitude, cn2_at_1m)
+    out = apply_kernel(_hufnagel_valley_kernel, high_altitude_wind_speed, altitude, cn2_at_1m,
+                       cn2_tropopause, cn2_upper_air, cn2_multiplier)
     return described(out, hufnagel_valley, units="m-2/3")
 
 
-def _hufnagel_valley_kernel(high_altitude_wind_speed, altitude, cn2_at_1m):
-    """Hufnagel-Valley Cn2 on plain arrays (arguments in the order of the result's dims)."""
+def _hufnagel_valley_kernel(high_altitude_wind_speed, altitude, cn2_at_1m,
+                            cn2_tropopause=5.94e-53, cn2_upper_air=2.7e-16, cn2_multiplier=1.0):
+    """Hufnagel-Valley Cn2 on plain arrays (arguments in the order of the result's dims).
+
+    At the defaults every operation is the one of HV 5/7 (the multiplier 1 is exact).
+    """
     h = altitude
     return (
-        5.94e-53 * (high_altitude_wind_speed / 27.0) ** 2 * h**10 * np.exp(-h / 1000.0)
-        + 2.7e-16 * np.exp(-h / 1500.0)
+        cn2_tropopause * (high_altitude_wind_speed / 27.0) ** 2 * h**10 * np.exp(-h / 1000.0)
+        + cn2_upper_air * np.exp(-h / 1500.0)
         + cn2_at_1m * np.exp(-h / 100.0)
-    )
+    ) * cn2_multiplier
 
 
 def _r0_from_integral(integral, wavelength):
@@ -153,6 +172,9 @@ def path_nodes(path_samples, rule):
 @contract(slant_range=LENGTH,
           cn2_at_1m=Values(Spec("m-2/3", "refractive-index structure parameter", low=0.0,
                                 low_open=True)),
+          cn2_tropopause=CN2, cn2_upper_air=CN2,
+          cn2_multiplier=Values(Spec("1", "multiplier of the Cn2 profile", low=0.0,
+                                     low_open=True)),
           wavelength=WAVELENGTH,
           path_samples=Spec("1", "samples along the path", low=2.0, whole=True))
 def slant_path_coherence_diameter(
@@ -165,6 +187,10 @@ def slant_path_coherence_diameter(
     path_samples=64,
     rule="gauss-legendre",
     geometry_form="stable",
+    cn2_tropopause=5.94e-53,
+    cn2_upper_air=2.7e-16,
+    cn2_multiplier=1.0,
+    cn2_profile=None,
 ):
     r"""Spherical-wave coherence diameter on a curved-Earth slant path, Hufnagel-Valley Cn2.
 
@@ -193,6 +219,14 @@ def slant_path_coherence_diameter(
         nodes for paths from 100 m to 300 km (``docs/otf.md``).
     geometry_form : {"stable", "law-of-cosines"}
         Formulas of the path heights (:data:`xbsm.geometry.FORMS`).
+    cn2_tropopause, cn2_upper_air : float or xr.DataArray
+        The other Hufnagel-Valley coefficients (:func:`hufnagel_valley`). [m^(-2/3)]
+    cn2_multiplier : float or xr.DataArray
+        Factor of the whole profile (Hufnagel-Valley or ``cn2_profile``), > 0. [1]
+    cn2_profile : xr.DataArray, optional
+        A table of :math:`C_n^2` over a ``height`` coordinate in place of
+        Hufnagel-Valley (:func:`xbsm.params.cn2_table`; the Hufnagel-Valley parameters are then
+        unused). [m^(-2/3)]
 
     Returns
     -------
@@ -202,30 +236,37 @@ def slant_path_coherence_diameter(
     Notes
     -----
     Schmidt (2010) Eq. 9.64 for a spherical wave (replacing IBSM Eq. 3-5) with
-    :math:`C_n^2(h(z))` from :func:`hufnagel_valley` and :math:`h(z)` the
-    height above the spherical Earth at distance :math:`z` from the target
+    :math:`C_n^2(h(z))` from :func:`hufnagel_valley` (or the table) and :math:`h(z)`
+    the height above the spherical Earth at distance :math:`z` from the target
     (:func:`xbsm.geometry.altitude_along_path`):
 
     .. math:: r_0 = \left[0.423\,k^2 L \int_0^1 C_n^2(h(tL))\, t^{5/3}\, dt\right]^{-3/5}
     """
     if rule not in PATH_RULES:
         raise ValueError(f"rule must be one of {PATH_RULES}; got {rule!r}")
+    table = None if cn2_profile is None else table_values(cn2_table(cn2_profile))
     out = apply_kernel(slant_path_kernel, wavelength, high_altitude_wind_speed, slant_range,
-                    sensor_altitude, target_altitude, cn2_at_1m,
-                    nodes=path_nodes(int(path_samples), rule), form=geometry_form)
+                       sensor_altitude, target_altitude, cn2_at_1m, cn2_tropopause,
+                       cn2_upper_air, cn2_multiplier,
+                       nodes=path_nodes(int(path_samples), rule), form=geometry_form,
+                       profile=table)
     return described(out, slant_path_coherence_diameter, units="m")
 
 
 def slant_path_kernel(wavelength, high_altitude_wind_speed, slant_range, sensor_altitude,
-                       target_altitude, cn2_at_1m, *, nodes, form):
+                      target_altitude, cn2_at_1m, cn2_tropopause=5.94e-53,
+                      cn2_upper_air=2.7e-16, cn2_multiplier=1.0, *, nodes, form,
+                      profile=None):
     """Slant-path r0 on plain arrays; ``nodes`` = (t, weights) of :func:`path_nodes`.
 
     Arguments in the order of the result's dims. The path runs along a new first axis.
+    ``profile``: (heights, Cn2) of a table (:func:`xbsm.params.table_values`) in place of
+    Hufnagel-Valley, or None.
     """
     t, w = nodes
     shape = np.broadcast_shapes(*(np.shape(a) for a in (
         wavelength, high_altitude_wind_speed, slant_range, sensor_altitude, target_altitude,
-        cn2_at_1m)))
+        cn2_at_1m, cn2_tropopause, cn2_upper_air, cn2_multiplier)))
     along = (slice(None),) + (None,) * len(shape)
 
     def on_path(a):
@@ -234,10 +275,35 @@ def slant_path_kernel(wavelength, high_altitude_wind_speed, slant_range, sensor_
     # geometry on plain ndarrays: xbsm.geometry clips with np.clip, which is not a ufunc
     heights = altitude_along_path(t[along] * slant_range, on_path(slant_range),
                                   on_path(sensor_altitude), on_path(target_altitude), form=form)
-    cn2 = _hufnagel_valley_kernel(on_path(high_altitude_wind_speed), heights,
-                                  on_path(cn2_at_1m))
+    if profile is None:
+        cn2 = _hufnagel_valley_kernel(on_path(high_altitude_wind_speed), heights,
+                                      on_path(cn2_at_1m), on_path(cn2_tropopause),
+                                      on_path(cn2_upper_air), on_path(cn2_multiplier))
+    else:
+        cn2 = table_kernel(heights, *profile) * on_path(cn2_multiplier)
     integral = np.einsum("k...,k->...", cn2, w * t ** (5.0 / 3.0)) * slant_range
     return _r0_from_integral(integral, wavelength)
+
+
+def table_kernel(altitude, heights, cn2):
+    """Cn2 of a table at ``altitude``, log-linear between heights (linear next to a 0).
+
+    Raises ValueError where ``altitude`` is above the table's last height.
+    """
+    altitude = np.asarray(altitude, dtype=float)
+    # the path's heights are computed; a sensor at the last height may exceed it by rounding
+    if np.any(altitude > heights[-1] + 1e-9 * max(abs(heights[-1]), 1.0)):
+        raise ValueError(
+            f"cn2_profile must cover the path: its last height is {heights[-1]:g} m but the "
+            f"path reaches {float(np.nanmax(altitude)):g} m; extend the table")
+    i = np.clip(np.searchsorted(heights, altitude, side="right") - 1, 0, heights.size - 2)
+    w = np.clip((altitude - heights[i]) / (heights[i + 1] - heights[i]), 0.0, 1.0)
+    lo, hi = cn2[i], cn2[i + 1]
+    both = (lo > 0.0) & (hi > 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        logs = np.exp(np.log(np.where(both, lo, 1.0)) * (1.0 - w)
+                      + np.log(np.where(both, hi, 1.0)) * w)
+    return np.where(both, logs, lo + (hi - lo) * w)
 
 
 @contract(coherence_diameter=LENGTH, wavelength=WAVELENGTH,
