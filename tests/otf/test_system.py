@@ -29,13 +29,23 @@ def test_niirs_falls_monotonically_with_defocus(method, obscuration):
 
 
 def test_zero_defocus_is_every_result_to_the_bit():
-    # the default, an explicit 0 and the 0 cell of a sweep with non-zero defocus beside it
+    # the default and an explicit 0: every result to the bit
     base = xbsm.niirs(olson_sensor("nir"), SCENARIO)
     zero = xbsm.niirs(olson_sensor("nir", defocus_opd=0.0), SCENARIO)
+    xr.testing.assert_identical(base, zero)
+    # the 0 cell of a sweep with non-zero defocus beside it: the aperture OTF to the bit,
+    # but the edge rule is the sweep's (one panel per lobe of its widest defocus, so that
+    # the optics OTF is shared), so the edge terms agree to the rule's convergence
+    # (accurate: within 1e-6 NIIRS of a 4x finer rule, docs/otf.md) and the flags exactly
     swept = xbsm.niirs(olson_sensor("nir", defocus_opd=xr.DataArray(
         [0.0, 1e-6], dims="defocus")), SCENARIO).isel(defocus=0, drop=True)
-    xr.testing.assert_identical(base, zero)
-    for name in base.data_vars:
+    np.testing.assert_array_equal(swept.flags.values, base.flags.values)
+    np.testing.assert_allclose(swept.niirs.values, base.niirs.values, rtol=0, atol=1e-6)
+    for name in ("rer_x", "rer_y", "eho_x", "eho_y"):
+        # 7e-7 measured: the rule is not split at the obscured aperture's kinks
+        np.testing.assert_allclose(swept[name].values, base[name].values, rtol=2e-6,
+                                   err_msg=name)
+    for name in ("snr", "gsd", "target_photoelectrons"):
         np.testing.assert_array_equal(swept[name].values, base[name].values, err_msg=name)
 
 
@@ -61,14 +71,16 @@ def test_defocus_enters_both_slices_filtered_and_unfiltered():
 
 
 def test_single_scenario_and_sweep_agree_with_defocus():
-    # the direct applier (one eager scenario) against the labelled one (a sweep)
+    # the direct applier (one eager scenario) against the labelled one (a sweep): to the
+    # edge rule's convergence, since the sweep's rule has a panel per lobe of its widest
+    # defocus (7e-8 relative measured on the first cell; to the bit on the widest)
     opd = [0.3 * LAM, 1.2 * LAM]
     swept = xbsm.niirs(olson_sensor("nir", defocus_opd=xr.DataArray(opd, dims="defocus")),
                        SCENARIO)
     for i, value in enumerate(opd):
         one = xbsm.niirs(olson_sensor("nir", defocus_opd=value), SCENARIO)
         np.testing.assert_allclose(swept.niirs.isel(defocus=i).values, one.niirs.values,
-                                   rtol=1e-12)
+                                   rtol=1e-12 if i == len(opd) - 1 else 1e-6)
 
 
 def test_pybsm_refuses_defocus_and_is_unchanged_without_it():
