@@ -1,4 +1,4 @@
-"""How often ``blur_unresolved`` flags a long-range ground-based visible camera, and what is at stake.
+"""How often ``blur_unresolved`` flags a long-range ground-based visible camera, and why.
 
 Issue 23: the flag was a false alarm where it is most often hit. The camera:
 aperture 0.15 m, focal length 1.5 m (F/10), band 0.4-0.7 um, pitch 3.45 um

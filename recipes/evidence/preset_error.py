@@ -340,7 +340,7 @@ def jsonable(x):
 
 def run(cases, label, methods=METHODS):
     rows, kept, rejected, t0 = [], [], {}, time.perf_counter()
-    for i, case in enumerate(cases):
+    for case in cases:
         ds, why = prepare(case)
         if ds is None:
             rejected[why] = rejected.get(why, 0) + 1
