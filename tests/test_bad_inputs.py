@@ -166,7 +166,7 @@ def test_beyond_the_horizon_is_flagged_not_silent():
 
 def test_a_system_blurred_over_many_pixels_is_flagged_not_trusted():
     # RER 0.019 from 20 px of jitter: the edge quadrature does not resolve the narrow OTF
-    # (recipes/evidence/preset_error.py: accurate off by up to 3.6 NIIRS below RER 0.05)
+    # (recipes/evidence/preset_error.py: accurate off by up to 28 NIIRS below RER 0.05)
     blurred = xbsm.sensor(**{**SENSOR, "jitter_x": 160e-6, "jitter_y": 160e-6})
     n = xbsm.niirs(blurred, SC)
     assert float(n.rer) < 0.05
