@@ -92,7 +92,9 @@ def main():
     t0 = time.perf_counter()
     load = os.getloadavg()
     rows, kept, rejected = pe.run(list(cells()), "ground camera", METHODS)
-    result = {"description": __doc__.split("\n\n")[0], "git": commit(), "machine": machine(),
+    tree = Path(xbsm.__file__).resolve().parents[1]  # the tree measured
+    result = {"description": __doc__.split("\n\n")[0], "git": commit(tree),
+              "xbsm_path": str(Path(xbsm.__file__).resolve().parent), "machine": machine(),
               "load_average_at_start": load, "sensor": SENSOR,
               "scenarios": {"altitude_m": ALTITUDES, "ground_range_m": GROUND_RANGES,
                             "visibility_km": VISIBILITIES, "cn2_at_1m": 1.7e-14,

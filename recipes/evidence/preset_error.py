@@ -381,7 +381,8 @@ def main():
                             Path(tempfile.gettempdir()) / "xbsm_preset_error" / "preset_error.json")
     t_start = time.perf_counter()
     load_start = os.getloadavg()
-    git = commit()
+    git = commit(Path(xbsm.__file__).resolve().parents[1])  # the tree measured
+    git["xbsm_path"] = str(Path(xbsm.__file__).resolve().parent)
     print(f"xbsm from {Path(xbsm.__file__).parent}; load {load_start[0]:.2f}", flush=True)
     assert er.modelling("fast") == er.modelling("accurate"), "fast models what accurate does"
     rng = np.random.default_rng(args.seed)
