@@ -24,6 +24,7 @@ al. 1997: ER(1.25) if strictly rising, else the maximum).
 
 Functions:
 
+- :func:`same_reference`: whether two methods model the same OTF (one reference serves both);
 - :func:`edge_integrals`: the rule on plain samples (used by the tests on closed forms);
 - :func:`reference_slices`: RER and EHO of one sensor + scenario under a method's
   modelling (its ``edge_otf`` convention, ``|OTF|`` or the OTF);
@@ -48,19 +49,26 @@ CHUNK_ELEMENTS = 3_000_000
 """Largest frequencies x band wavelengths of one :func:`xbsm.system_otf` call (memory)."""
 PATH_SAMPLES = 1024
 """r0 path nodes of the reference modelling (Gauss-Legendre; accurate uses 64)."""
-NUMERICAL_KNOBS = ("edge_rule", "frequency_samples", "nodes_per_panel",
-                   "panels_per_oscillation", "min_panels", "max_frequency_nodes",
-                   "otf_wavelengths", "turbulence_path_samples", "turbulence_path_rule",
-                   "undersampling_threshold", "name")
-"""Knobs that change only the numerics (or the flags), not the model; two methods that
-agree on every other knob share one reference."""
+PROBE_FREQUENCIES = 64
+"""Frequencies at which :func:`same_reference` compares two methods' OTF slices."""
 
 
-def modelling(m) -> tuple:
-    """The knobs of method ``m`` that define the model (two methods, one reference if equal)."""
-    m = xbsm.method(m)
-    return tuple((k, repr(getattr(m, k))) for k in sorted(m.knobs())
-                 if k not in NUMERICAL_KNOBS)
+def same_reference(sensor, scenario, m1, m2) -> bool:
+    """Whether methods ``m1`` and ``m2`` have the same reference on this system.
+
+    True when their edge_otf conventions agree and the system OTF slices of their
+    :func:`reference_method` agree exactly at :data:`PROBE_FREQUENCIES` frequencies in
+    (0, D/lambda_min): the reference depends on nothing else. (A list of "numerical"
+    knobs would go stale as the package gains quadrature knobs.)
+    """
+    m1, m2 = xbsm.method(m1), xbsm.method(m2)
+    if m1.edge_otf != m2.edge_otf:
+        return False
+    fmax = float(sensor["aperture_diameter"]) / float(sensor["wavelength_min"])
+    f = fmax * (np.arange(PROBE_FREQUENCIES) + 0.5) / PROBE_FREQUENCIES
+    a, b = (xbsm.system_otf(sensor, scenario, f, method=reference_method(m)) for m in (m1, m2))
+    return all(np.array_equal(a[k].values, b[k].values, equal_nan=True)
+               for k in ("system", "system_unfiltered"))
 
 
 def edge_integrals(otf, fmax, ifov, positions=POSITIONS):
