@@ -215,3 +215,12 @@ def test_chain_one_axis_drift_rer_tends_to_one_over_length():
     ref = er.reference_slices(s, sc, "accurate", intervals=2**15)
     assert ref["rer_x"] == pytest.approx(1.0 / 300.0, rel=0.03)
     assert ref["level_difference"] < 1e-6
+
+
+def test_accurate_and_fast_share_a_reference_pybsm_does_not():
+    # fast differs from accurate in numerical knobs only; pybsm passes |OTF| and models
+    # its own filter OTF, so the recipe gives it a reference of its own
+    s, sc = xbsm.sensor(**_olson()), xbsm.scenario(**AIR)
+    assert er.same_reference(s, sc, "accurate", "fast")
+    assert not er.same_reference(s, sc, "accurate", "pybsm")
+    assert not er.same_reference(s, sc, "accurate", xbsm.method("accurate", edge_otf="abs"))
