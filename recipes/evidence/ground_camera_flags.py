@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import json
 import os
 import sys
 import time
@@ -113,8 +112,7 @@ def main():
                                 f"{s[group][str(v)]['p95']:.1e} max {s[group][str(v)]['max']:.1e}")
                 + f" NaN {s[group][str(v)]['nan_cells']}" for v in pe.GIQE))
     result["runtime_s"] = time.perf_counter() - t0
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(pe.jsonable(result), indent=1) + "\n")
+    pe.write_json(args.out, result)
     print(f"wrote {args.out} in {result['runtime_s']:.0f} s; xbsm {xbsm.__file__}")
 
 

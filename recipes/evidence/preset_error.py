@@ -336,6 +336,17 @@ def jsonable(x):
     return x
 
 
+def write_json(path, result):
+    """``result`` as strict JSON: indented, except one line per entry of ``cases`` (size)."""
+    result = jsonable(result)
+    cases = result.pop("cases", [])
+    text = json.dumps(result, indent=1)
+    rows = ",\n  ".join(json.dumps(c, separators=(",", ":")) for c in cases)
+    text = text[:-2] + f',\n "cases": [\n  {rows}\n ]\n}}\n' if cases else text + "\n"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+
+
 # --- main -------------------------------------------------------------------------------
 
 
@@ -437,8 +448,7 @@ def main():
     }
     result["runtime_s"] = time.perf_counter() - t_start
     result["load_average_at_end"] = os.getloadavg()
-    out_path.parent.mkdir(parents=True, exist_ok=True)
-    out_path.write_text(json.dumps(jsonable(result), indent=1) + "\n")
+    write_json(out_path, result)
     print(f"wrote {out_path} in {result['runtime_s']:.0f} s")
 
 
