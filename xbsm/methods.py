@@ -249,7 +249,7 @@ _PRESETS: dict[str, Method] = {
     ),
 }
 _PRESETS["fast"] = _PRESETS["accurate"].replace(
-    # otf_wavelengths 24, not 8: on 240 random systems (recipes/evidence/preset_error.py)
+    # otf_wavelengths 24, not 8: on 240 random systems (recipes/evidence/archive/preset_tuning.py)
     # 8 bins cost up to 7.3e-3 NIIRS where RER >= 0.2 and 24 bins 7.1e-4, at 1.34x the
     # speed of accurate
     name="fast", nodes_per_panel=4, otf_wavelengths=24, turbulence_path_samples=16,
