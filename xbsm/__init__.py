@@ -37,6 +37,7 @@ _PUBLIC = {
     "open_atmosphere": "atmosphere",
     "scenario": "params",
     "sensor": "params",
+    "mrtd": "model",
     "netd": "model",
     "niirs": "model",
     "snr": "model",

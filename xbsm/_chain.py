@@ -33,6 +33,7 @@ from . import geometry, noise, params, quadrature, radiometry
 from ._kernels import apply_orchestrator
 from ._metadata import Output, dataset_of, declared, outputs, result
 from .atmosphere import WAVELENGTH_ATTRS, band_atmosphere, band_atmosphere_arrays
+from .metrics import acquisition
 from .metrics import edge as edge_
 from .metrics import giqe as giqe_
 from .otf import system
@@ -52,7 +53,7 @@ OUTPUTS = outputs(
 _DECLARED = {**radiometry.SIGNAL_OUTPUTS, **noise.OUTPUTS, **radiometry.SENSITIVITY_OUTPUTS,
              **geometry.VIEW_OUTPUTS,
              **edge_.SLICE_OUTPUTS, **giqe_.OUTPUTS,
-             **quadrature.CUTOFF_OUTPUTS, **OUTPUTS}
+             **quadrature.CUTOFF_OUTPUTS, **acquisition.OUTPUTS, **OUTPUTS}
 
 
 # ---- the composition ---------------------------------------------------------------
@@ -193,6 +194,46 @@ def netd(sensor: xr.Dataset, scenario: xr.Dataset, m) -> xr.Dataset:
         contrast = ("snr", "snr_frame", "contrast_photoelectrons", "background_photoelectrons")
         values = {name: value for name, value in values.items() if name not in contrast}
         return ap.result({**values, "flags": flags}, atm, m)
+
+
+def mrtd(sensor: xr.Dataset, scenario: xr.Dataset, m, frequency, knobs: dict) -> xr.Dataset:
+    """:func:`xbsm.mrtd` on checked inputs (the scene in the scenario's target) and knobs.
+
+    ``frequency``: checked bar frequencies, None for the default grid. Sweep-only (the
+    labelled applier): the SNR chain with the scene's NETD, the system OTF on the bar
+    frequencies, then the bar-pattern threshold.
+    """
+    ap = Labelled(sensor, scenario)
+    values, atm, _ = _snr_chain(ap, m, "scenario", sensitivity=True)
+    s = sensor
+    spacing_x = s["pixel_pitch_x"] / s["focal_length"]
+    spacing_y = s["pixel_pitch_y"] / s["focal_length"]
+    if frequency is None:  # 64 bar frequencies up to the finer axis' Nyquist frequency
+        nyquist = 0.5 / float(np.minimum(spacing_x, spacing_y).min())
+        frequency = np.linspace(0.0, nyquist, 65)[1:]
+    frequency = params.frequencies("frequency", params.labelled("frequency", frequency,
+                                                                "frequency"))
+    if "frequency" in frequency.coords:
+        frequency["frequency"].attrs.update(units="cycles/rad", long_name="bar frequency")
+    slant = geometry.slant_range(scenario["ground_range"], scenario["altitude"],
+                                 form=m.geometry)
+    otf = system.system_components(
+        sensor, scenario, frequency,
+        spectral_weights=system.otf_weights(values["spectral_weights"]),
+        integration_time=values["effective_integration_time"], slant_range=slant, method=m)
+    mtf = abs(otf["system_unfiltered"])
+    threshold = acquisition.minimum_resolvable(values["netd_frame"], mtf, spacing_x,
+                                               spacing_y, **knobs)
+    flags = ap.flag(values["flags"], "no_thermal_signal",
+                    ~(values["signal_derivative"] > 0.0))
+    flags = ap.flag(flags, "bars_unresolved", ~(mtf > 0.0))
+    nyquist = 0.5 / ap.orientations(spacing_x, spacing_y)
+    flags = ap.flag(flags, "bars_aliased", mtf["frequency"] > nyquist * (1.0 + 1e-12))
+    kept = ("netd", "netd_frame", "signal_derivative", "target_photoelectrons",
+            "effective_integration_time", "total_noise")
+    out = {"mrtd": threshold, "mtf": mtf, **{name: values[name] for name in kept},
+           "flags": flags}
+    return ap.result(out, atm, m, **{name: float(value) for name, value in knobs.items()})
 
 
 def niirs(sensor: xr.Dataset, scenario: xr.Dataset, m, calibration,
