@@ -77,7 +77,8 @@ EXPECTED_UNITS = MappingProxyType({
     # noise-equivalent quantities
     "signal_derivative": "count K-1", "netd": "K", "netd_frame": "K", "ner": "W m-2 sr-1",
     "ner_target": "W m-2 sr-1", "nei": "W m-2", "mrtd": "K", "mtf": "1",
-    "minimum_resolvable": "K",
+    "minimum_resolvable": "K", "mrc": "1", "noise_equivalent_contrast": "1",
+    "reflectance_signal": "count",
     # edge terms and GIQE
     "rer": "1", "rer_x": "1", "rer_y": "1", "eho": "1", "eho_x": "1", "eho_y": "1",
     "rer_giqe5": "1", "noise_gain": "1", "edge_response": "1",
@@ -292,6 +293,7 @@ def _model_cases():
         "snr": lambda: xbsm.snr(s, sc),
         "netd": lambda: xbsm.netd(s, sc),
         "mrtd": lambda: xbsm.mrtd(s, sc, frequency=[1e4, 1e5]),
+        "mrc": lambda: xbsm.mrc(s, sc, frequency=[1e4, 1e5]),
         "system_otf": lambda: xbsm.system_otf(s, sc),
         "reflectance_to_photoelectrons": lambda: reflectance_to_photoelectrons(s, sc),
     }

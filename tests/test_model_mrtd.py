@@ -195,3 +195,84 @@ def test_a_perfect_reflector_has_infinite_mrtd_and_is_flagged():
 def test_bad_input_names_the_parameter_and_range(kwargs, message):
     with pytest.raises(ValueError, match=message):
         xbsm.mrtd(xbsm.sensor(**MWIR), xbsm.scenario(**LAB), **kwargs)
+
+
+# ---- MRC: the same threshold with the noise-equivalent contrast ------------------------
+
+def _olson(**changes):
+    from xbsm.examples import olson_scenario, olson_sensor
+    return olson_sensor(), olson_scenario(ground_range=0.0, visibility=23.0, **changes)
+
+
+def test_mrc_matches_an_independent_numpy_computation():
+    s, sc = _olson()
+    r = 0.07
+    # the scene (reflectance r) against a black surface, through xbsm.snr on the scenario
+    pair = sc.assign(target_reflectance=sc.background_reflectance * 0 + r,
+                     background_reflectance=sc.background_reflectance * 0)
+    n = xbsm.snr(s, pair, targets="scenario")
+    nec = float(n.total_noise / n.contrast_photoelectrons)
+    f = np.array([1e4, 5e4, 1e5, 2e5])
+    fa = xr.DataArray(f, dims="frequency", coords={"frequency": f})
+    otf = system.system_components(
+        s, pair, fa, spectral_weights=system.otf_weights(n.spectral_weights),
+        integration_time=n.effective_integration_time,
+        slant_range=xbsm.geometry.slant_range(pair.ground_range, pair.altitude),
+        method=xbsm.method("accurate"))
+    mtf = np.abs(otf.system_unfiltered.transpose("orientation", "frequency").values)
+    ifov = float(s.pixel_pitch_x / s.focal_length)  # square pixels
+    expected = (math.pi ** 2 / (4 * math.sqrt(7)) * 2.5 * nec * f * ifov
+                / math.sqrt(0.1 * 30.0) / mtf)
+    got = xbsm.mrc(s, sc, frequency=f)
+    assert float(sc.background_reflectance) == r
+    np.testing.assert_allclose(got.mrc.transpose("orientation", "frequency").values,
+                               expected, rtol=1e-6)
+    assert float(got.noise_equivalent_contrast) == pytest.approx(nec, rel=1e-12)
+    assert got.mrc.attrs["units"] == "1"
+
+
+def test_mrc_reflectance_signal_is_linear_in_reflectance():
+    # N(r) - N(0) = r dN/dr: doubling the scene's reflectance doubles it (well not full)
+    s, _ = _olson()
+    s = s.assign(integration_time=s.integration_time * 0 + 1e-3)  # the well stays below full
+    one = xbsm.mrc(s, _olson(background_reflectance=0.1)[1], frequency=[1e4])
+    two = xbsm.mrc(s, _olson(background_reflectance=0.2)[1], frequency=[1e4])
+    assert not has_flag(one.flags, "well_fill_limited").any()
+    assert not has_flag(two.flags, "well_fill_limited").any()
+    assert float(two.reflectance_signal) == pytest.approx(2 * float(one.reflectance_signal),
+                                                          rel=1e-9)
+
+
+def test_mrc_falls_with_scene_reflectance():
+    s, _ = _olson()
+    r = xr.DataArray([0.05, 0.1, 0.3], dims="r")
+    out = xbsm.mrc(s, _olson(background_reflectance=r)[1], frequency=[1e4, 1e5])
+    assert (out.mrc.diff("r") < 0).all()
+
+
+def test_mrc_without_reflected_light_is_inf_and_flagged():
+    # an LWIR camera looking at a 300 K scene on a 2 m path: a black surface at the same
+    # temperature emits more than the scene reflects, so there is no reflective contrast
+    sc = xbsm.scenario(**LAB, background_reflectance=0.3, background_temperature=300.0)
+    out = xbsm.mrc(xbsm.sensor(**LWIR), sc, frequency=FREQUENCY)
+    assert np.isinf(out.mrc).all()
+    assert has_flag(out.flags, "no_reflective_signal").all()
+
+
+def test_mrc_dask_sweep_stays_lazy(no_compute):
+    s, sc = _olson()
+    s = s.assign(read_noise=xr.DataArray(dsa.from_array(np.array([20.0, 200.0]), chunks=1),
+                                         dims="read").assign_attrs(s.read_noise.attrs))
+    lazy = xbsm.mrc(s, sc, frequency=[1e4, 1e5])
+    assert isinstance(lazy.mrc.data, dsa.Array)
+    assert {"orientation", "frequency", "read"} <= set(lazy.mrc.dims)
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"snr_threshold": -1.0}, r"snr_threshold must be a real number in \(0, inf\)"),
+    ({"frequency": [-5.0]}, r"frequency must be in \[0, inf\)"),
+])
+def test_mrc_bad_input_names_the_parameter_and_range(kwargs, message):
+    s, sc = _olson()
+    with pytest.raises(ValueError, match=message):
+        xbsm.mrc(s, sc, **kwargs)

@@ -157,12 +157,18 @@ FLAGS = MappingProxyType({
         "the bars: a sampled imager aliases the bars, and the MRTD formula, which ignores "
         "sampling, is not a threshold for resolving them",
     ),
+    "no_reflective_signal": (
+        67108864,
+        "the scene gives no more photoelectrons than a black surface at its temperature "
+        "(no reflected light in the band, or its own emission dominates): the "
+        "noise-equivalent contrast and the MRC are infinite or NaN",
+    ),
 })
 
 INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive", "rer_nonpositive",
            "blur_unresolved", "grd_unresolved", "upsampled", "image_nonfinite", "image_small",
            "reference_unresolved", "no_thermal_signal", "atmosphere_inconsistent",
-           "bars_unresolved", "bars_aliased")
+           "bars_unresolved", "bars_aliased", "no_reflective_signal")
 """Bits saying a number is NaN or may be wrong."""
 
 CALIBRATION = (
@@ -181,7 +187,7 @@ NOTICE = ("atmosphere_sparse", "well_fill_limited", "partial_spectral_coverage",
 """Bits that are neither: information about how a number was obtained."""
 
 INVALID_MASK = sum(FLAGS[name][0] for name in INVALID)
-"""OR of the :data:`INVALID` bits (61725313)."""
+"""OR of the :data:`INVALID` bits (128834177)."""
 
 CALIBRATION_MASK = sum(FLAGS[name][0] for name in CALIBRATION)
 """OR of the :data:`CALIBRATION` bits (4195704)."""

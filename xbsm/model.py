@@ -1,4 +1,4 @@
-"""The public doors of the model chain: ``snr``, ``netd``, ``mrtd``, ``niirs``, ``system_otf``.
+"""The public doors of the model chain: snr, netd, mrtd, mrc, niirs and system_otf.
 
 Each checks its inputs, resolves the method and enters :mod:`xbsm._chain`, which
 composes the stages (parameters -> atmosphere -> radiometry -> noise -> (OTF ->
@@ -214,15 +214,87 @@ def mrtd(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method="accur
     rises.
     """
     scenario = _scene(sensor, scenario, temperature, reflectance)
-    if frequency is not None:
-        frequency = params.labelled("frequency", frequency, "frequency")
-        bad = ~(frequency >= 0.0)  # NaN too
-        if bool(bad.any()):
-            raise ValueError("frequency must be in [0, inf) cycles/rad; got "
-                             f"{frequency.values[bad.values][0]!r}")
     knobs = {"snr_threshold": snr_threshold, "eye_integration_time": eye_integration_time,
              "frame_rate": frame_rate, "bar_aspect": bar_aspect}
-    return _chain.mrtd(sensor, scenario, method, frequency, knobs)
+    return _chain.mrtd(sensor, scenario, method, _bar_frequencies(frequency), knobs)
+
+
+def _bar_frequencies(frequency):
+    """Bar frequencies as given (None: the chain's default), each in [0, inf) cycles/rad."""
+    if frequency is None:
+        return None
+    frequency = params.labelled("frequency", frequency, "frequency")
+    bad = ~(frequency >= 0.0)  # NaN too
+    if bool(bad.any()):
+        raise ValueError("frequency must be in [0, inf) cycles/rad; got "
+                         f"{frequency.values[bad.values][0]!r}")
+    return frequency
+
+
+@contract(method=_METHOD, **_OBSERVER)
+def mrc(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method="accurate", *,
+        snr_threshold=acquisition.SNR_THRESHOLD,
+        eye_integration_time=acquisition.EYE_INTEGRATION_TIME,
+        frame_rate=acquisition.FRAME_RATE, bar_aspect=acquisition.BAR_ASPECT):
+    r"""Minimum resolvable contrast of four-bar targets against bar frequency.
+
+    The reflective-band counterpart of :func:`mrtd`: the same bar-pattern threshold
+    with the scene's single-frame noise-equivalent contrast in place of the NETD. The
+    scene is the scenario's background (its reflectance r and temperature); the
+    contrast is the Weber contrast (r_bars - r) / r of the bars' reflectance against it,
+    at the scene (the path's transmission and radiance lower it on the way, as in
+    :func:`snr`).
+
+    Parameters
+    ----------
+    sensor : xr.Dataset
+        From :func:`xbsm.sensor`.
+    scenario : xr.Dataset
+        From :func:`xbsm.scenario`: the path and the scene (``background_reflectance``,
+        ``background_temperature``); its target is not used.
+    frequency : array_like or xr.DataArray, optional
+        Bar frequencies in [0, inf) on dim ``frequency``; default as :func:`mrtd`.
+        [cycles/rad]
+    method : str or Method
+        "accurate" (default), "fast" or "pybsm", or a :class:`xbsm.methods.Method`.
+    snr_threshold, eye_integration_time, frame_rate, bar_aspect : float
+        The observer, as for :func:`mrtd` (defaults 2.5, 0.1 s, 30 Hz, 7).
+
+    Returns
+    -------
+    xr.Dataset
+        ``mrc`` [1] and ``mtf`` [1] over ``orientation`` and ``frequency`` and every sweep
+        dim; ``noise_equivalent_contrast`` [1] (one frame, one pixel);
+        ``reflectance_signal`` [count], the scene's photoelectrons over a black
+        surface's; ``target_photoelectrons`` (the scene's), ``effective_integration_time``,
+        ``total_noise``; ``flags`` (``bars_unresolved``, ``bars_aliased``,
+        ``no_reflective_signal`` where the scene is no brighter than black: MRC inf).
+
+    Notes
+    -----
+    .. math::
+
+        \mathrm{MRC}(f) = rac{\pi^2}{4\sqrt{7}}\,\mathrm{SNR_{th}}\,
+        \mathrm{NEC}\,rac{f}{\mathrm{MTF}(f)}\sqrt{rac{lpha\,eta}{t_e\,F_R}},
+        \qquad \mathrm{NEC} = rac{\sigma}{N(r) - N(0)}
+
+    sigma the scene's total noise, N the photoelectrons of a surface of reflectance r
+    at the scene's temperature (linear in r, so N(r) - N(0) = r dN/dr, the signal of
+    a unit Weber contrast). The derivation is :func:`mrtd`'s with contrast for
+    temperature; no published MRC formula of this form could be found with the
+    project's search tools (published MRC definitions are measurement procedures), so
+    this is xbsm's analogue, not a transcription. No display or eye model.
+    """
+    check_inputs(sensor, scenario)
+    black = {"target_temperature": scenario["background_temperature"],
+             "target_reflectance": scenario["background_reflectance"],
+             "background_reflectance": xr.zeros_like(scenario["background_reflectance"])}
+    scenario = scenario.assign({name: value.assign_attrs(scenario[name].attrs)
+                                for name, value in black.items()})
+    check_inputs(sensor, scenario)
+    knobs = {"snr_threshold": snr_threshold, "eye_integration_time": eye_integration_time,
+             "frame_rate": frame_rate, "bar_aspect": bar_aspect}
+    return _chain.mrc(sensor, scenario, method, _bar_frequencies(frequency), knobs)
 
 
 @contract(method=_METHOD, calibration=Resolved(metrics.giqe_calibrations), targets=_TARGETS)

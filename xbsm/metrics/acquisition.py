@@ -1,10 +1,12 @@
-"""Target-acquisition figures of merit: the minimum resolvable temperature difference (MRTD).
+"""Target-acquisition figures of merit: minimum resolvable temperature difference and contrast.
 
 The bar-pattern threshold of the classic static performance model (Ratches et al.,
 NVL 1975; its FLIR92 / NVTherm descendants): the temperature difference of a
 four-bar target, bars ``bar_aspect`` (7) times as long as they are wide, at which an
 observer who integrates the displayed noise over one bar and over the eye's
-integration time sees the bars at a signal-to-noise ratio ``snr_threshold``.
+integration time sees the bars at a signal-to-noise ratio ``snr_threshold``. With a
+noise-equivalent contrast in place of the NETD, the same threshold is the minimum
+resolvable contrast (MRC) of reflective bands.
 
 Only the sensor is modelled: no display MTF, no eye MTF and no eye contrast
 threshold (issue 25 item 3), so the MRTD falls to 0 with the bar frequency instead of
@@ -33,6 +35,11 @@ OUTPUTS = outputs(
     Output("mrtd", "K", "minimum resolvable temperature difference",
            dims=("orientation", "frequency")),
     Output("mtf", "1", "system MTF across the bars", dims=("orientation", "frequency")),
+    Output("mrc", "1", "minimum resolvable contrast", dims=("orientation", "frequency")),
+    Output("noise_equivalent_contrast", "1",
+           "noise-equivalent Weber contrast of the scene in one frame"),
+    Output("reflectance_signal", "count",
+           "photoelectrons of the scene over those of a black surface"),
 )
 """The MRTD's outputs, declared."""
 
@@ -64,7 +71,8 @@ def minimum_resolvable(noise_equivalent, mtf, sample_spacing_x, sample_spacing_y
     Parameters
     ----------
     noise_equivalent : float or xr.DataArray
-        Single-frame, single-pixel noise-equivalent temperature difference (NETD). [K]
+        Single-frame, single-pixel noise-equivalent temperature difference (NETD) [K];
+        or noise-equivalent contrast, for the MRC [1].
     mtf : xr.DataArray
         System OTF (its modulus is used) across the bars, on dims ``orientation`` (x:
         bars modulated along x, y: along y) and ``frequency`` (its coordinate: the bar
@@ -84,7 +92,7 @@ def minimum_resolvable(noise_equivalent, mtf, sample_spacing_x, sample_spacing_y
     -------
     xr.DataArray
         MRTD over ``orientation``, ``frequency`` and the inputs' dims; inf where the
-        MTF is at or below zero. [K]
+        MTF is at or below zero. [K] (MRC [1] from a noise-equivalent contrast)
 
     Notes
     -----
