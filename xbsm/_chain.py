@@ -248,7 +248,8 @@ def mrtd(sensor: xr.Dataset, scenario: xr.Dataset, m, frequency, knobs: dict) ->
 def mrc(sensor: xr.Dataset, scenario: xr.Dataset, m, frequency, knobs: dict) -> xr.Dataset:
     """:func:`xbsm.mrc` on checked inputs (the scene as target, black as background), knobs.
 
-    The background is a black surface at the scene's temperature. The contrast photoelectrons of the scene against black are N(r) - N(0) = r dN/dr (the
+    The background is a black surface at the scene's temperature. The contrast
+    photoelectrons of the scene against black are N(r) - N(0) = r dN/dr (the
     photoelectrons are linear in reflectance), the signal of a unit Weber contrast; the
     noise is the scene's (the brighter), so the noise-equivalent contrast is 1 / snr_frame.
     """
