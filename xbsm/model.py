@@ -274,9 +274,9 @@ def mrc(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method="accura
     -----
     .. math::
 
-        \mathrm{MRC}(f) = rac{\pi^2}{4\sqrt{7}}\,\mathrm{SNR_{th}}\,
-        \mathrm{NEC}\,rac{f}{\mathrm{MTF}(f)}\sqrt{rac{lpha\,eta}{t_e\,F_R}},
-        \qquad \mathrm{NEC} = rac{\sigma}{N(r) - N(0)}
+        \mathrm{MRC}(f) = \frac{\pi^2}{4\sqrt{7}}\,\mathrm{SNR_{th}}\,
+        \mathrm{NEC}\,\frac{f}{\mathrm{MTF}(f)}\sqrt{\frac{\alpha\,\beta}{t_e\,F_R}},
+        \qquad \mathrm{NEC} = \frac{\sigma}{N(r) - N(0)}
 
     sigma the scene's total noise, N the photoelectrons of a surface of reflectance r
     at the scene's temperature (linear in r, so N(r) - N(0) = r dN/dr, the signal of

@@ -105,7 +105,7 @@ def minimum_resolvable(noise_equivalent, mtf, sample_spacing_x, sample_spacing_y
     with a = ``bar_aspect``, alpha and beta the sample spacings, t_e the eye's
     integration time and F_R the frame rate. Derivation: the square-wave bars of
     temperature difference dT differ, bar against space and after the MTF, by the
-    fundamental's 8 / pi^2 dT |OTF(f)|; one bar (width 1 / (2 f), length a / (2 f))
+    fundamental's 8 / pi^2 dT MTF(f); one bar (width 1 / (2 f), length a / (2 f))
     covers a / (4 f^2 alpha beta) samples in each of t_e F_R frames, over which the
     eye averages the white single-frame noise NETD. Setting the ratio to SNR_th gives
     the equation. It is the classic static-performance-model form
