@@ -13,6 +13,8 @@ import dask.array as dsa
 import numpy as np
 import pytest
 import xarray as xr
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import xbsm
 from xbsm.flags import has_flag
@@ -113,6 +115,23 @@ def test_mrtd_rises_with_frequency_while_the_mtf_falls(camera):
                      frequency=np.linspace(0.0, 0.999 * cutoff, 300))
     falling = (wide.mtf.diff("frequency") < 0).values
     assert falling.any() and (wide.mrtd.diff("frequency").values[falling] > 0).all()
+
+
+@settings(max_examples=15, deadline=None)
+@given(d=st.floats(0.02, 0.2), focal=st.floats(0.1, 0.6), pitch=st.floats(8e-6, 30e-6),
+       read=st.floats(10.0, 1000.0))
+def test_mrtd_is_finite_rising_and_flagged_right_over_random_cameras(d, focal, pitch, read):
+    camera = {**MWIR, "aperture_diameter": d, "focal_length": focal, "pixel_pitch_x": pitch,
+              "read_noise": read}
+    cutoff, nyquist = d / 3e-6, 0.5 * focal / pitch
+    first_zero = min(cutoff, focal / pitch)
+    f = np.linspace(0.0, 0.99 * first_zero, 40)
+    r = xbsm.mrtd(xbsm.sensor(**camera), xbsm.scenario(**LAB), frequency=f)
+    mrtd = r.mrtd.sel(orientation="x").values
+    assert np.isfinite(mrtd).all() and (np.diff(mrtd) > 0).all()
+    aliased = has_flag(r.flags.sel(orientation="x"), "bars_aliased").values
+    np.testing.assert_array_equal(aliased, f > nyquist * (1 + 1e-12))
+    assert not has_flag(r.flags, "bars_unresolved").any()
 
 
 def test_beyond_the_optics_cutoff_mrtd_is_inf_and_flagged():
