@@ -179,7 +179,8 @@ def kernels_using_xarray(source: str, module: str) -> set:
 STAGES = {"xbsm.atmosphere": "atmosphere lookup", "xbsm.geometry": "geometry",
           "xbsm.radiometry": "radiometry", "xbsm.noise": "noise",
           "xbsm.quadrature": "quadrature", "xbsm.otf.system": "otf.system",
-          "xbsm.metrics.edge": "metrics.edge", "xbsm.metrics.giqe": "metrics.giqe"}
+          "xbsm.metrics.edge": "metrics.edge", "xbsm.metrics.giqe": "metrics.giqe",
+          "xbsm.metrics.acquisition": "metrics.acquisition"}
 #: The one module that composes the stages.
 CHAIN = "xbsm._chain"
 

@@ -76,7 +76,9 @@ EXPECTED_UNITS = MappingProxyType({
     "sensor_rate": "s-1", "target_rate": "s-1",
     # noise-equivalent quantities
     "signal_derivative": "count K-1", "netd": "K", "netd_frame": "K", "ner": "W m-2 sr-1",
-    "ner_target": "W m-2 sr-1", "nei": "W m-2",
+    "ner_target": "W m-2 sr-1", "nei": "W m-2", "mrtd": "K", "mtf": "1",
+    "minimum_resolvable": "K", "mrc": "1", "noise_equivalent_contrast": "1",
+    "reflectance_signal": "count",
     # edge terms and GIQE
     "rer": "1", "rer_x": "1", "rer_y": "1", "eho": "1", "eho_x": "1", "eho_y": "1",
     "rer_giqe5": "1", "noise_gain": "1", "edge_response": "1",
@@ -178,6 +180,9 @@ NOT_LABELLED = MappingProxyType({
     "xbsm.quadrature.pybsm_slice_count": "returns an int",
     "xbsm.quadrature.undersampled": "returns a boolean mask that feeds a flag",
     "xbsm.metrics.giqe.giqe_calibrations": "returns a table of calibrations",
+    "xbsm.metrics.acquisition.bar_constant": "returns the MRTD formula's constant, a float",
+    "xbsm.metrics.acquisition.minimum_resolvable_kernel": "a kernel: plain numpy arrays in "
+    "and out (labelled by minimum_resolvable)",
     "xbsm.otf.system.spectral_bins": "internal binning of the polychromatic OTF",
     "xbsm.metrics.edge.check_slice": "a validator: raises or returns None",
     "xbsm.otf.spectral.is_lazy": "returns a bool",
@@ -207,7 +212,7 @@ NOT_LABELLED = MappingProxyType({
 
 MODULES = (atmosphere.database, atmosphere.rules, atmosphere.lookup,
            geometry, noise, quadrature, radiometry, xbsm.model,
-           metrics.edge, metrics.grd, metrics.giqe,
+           metrics.edge, metrics.grd, metrics.giqe, metrics.acquisition,
            aperture, defocus, detector, filters, motion, psf, spectral, system, turbulence,
            user, wavefront)
 
@@ -287,6 +292,8 @@ def _model_cases():
     cases = {
         "snr": lambda: xbsm.snr(s, sc),
         "netd": lambda: xbsm.netd(s, sc),
+        "mrtd": lambda: xbsm.mrtd(s, sc, frequency=[1e4, 1e5]),
+        "mrc": lambda: xbsm.mrc(s, sc, frequency=[1e4, 1e5]),
         "system_otf": lambda: xbsm.system_otf(s, sc),
         "reflectance_to_photoelectrons": lambda: reflectance_to_photoelectrons(s, sc),
     }
@@ -403,6 +410,10 @@ def _cases():
         "slice_terms": lambda: metrics.edge.slice_terms(*_system_slices(), "real"),
         "ground_resolved_distance": lambda: metrics.ground_resolved_distance(
             _edge_slice()[0], xr.DataArray([10.0, 50.0], dims="snr"), 2e-6, 20e3),
+        "minimum_resolvable": lambda: metrics.minimum_resolvable(
+            0.05, xr.DataArray([[1.0, 0.5]], dims=("orientation", "frequency"),
+                               coords={"orientation": ["x"], "frequency": [1e4, 2e4]}),
+            2e-6, 3e-6),
         "giqe3": lambda: metrics.giqe3(rer=0.35, gsd=0.5, eho=1.0, snr=50.0),
         "giqe4": lambda: metrics.giqe4(rer=0.35, gsd=0.5, eho=1.0, snr=50.0, elevation=1.0),
         "giqe5": lambda: metrics.giqe5(rer_x=0.35, rer_y=0.4, gsd=0.5, snr=20.0, elevation=1.0),
@@ -610,6 +621,7 @@ _TABLE_MODULES = ("xbsm.atmosphere.database", "xbsm.atmosphere.rules",
                   "xbsm.plot", "xbsm.plot._style", "xbsm.quadrature", "xbsm.radiometry",
                   "xbsm.units", "xbsm.study.goals",
                   "xbsm.metrics.edge", "xbsm.metrics.giqe", "xbsm.metrics.grd",
+                  "xbsm.metrics.acquisition",
                   *(f"xbsm.otf.{m}" for m in ("aperture", "defocus", "detector", "filters",
                                               "motion", "psf", "spectral", "system",
                                               "turbulence", "user", "wavefront")))

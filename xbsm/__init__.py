@@ -37,6 +37,8 @@ _PUBLIC = {
     "open_atmosphere": "atmosphere",
     "scenario": "params",
     "sensor": "params",
+    "mrc": "model",
+    "mrtd": "model",
     "netd": "model",
     "niirs": "model",
     "snr": "model",

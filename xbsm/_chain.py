@@ -33,6 +33,7 @@ from . import geometry, noise, params, quadrature, radiometry
 from ._kernels import apply_orchestrator
 from ._metadata import Output, dataset_of, declared, outputs, result
 from .atmosphere import WAVELENGTH_ATTRS, band_atmosphere, band_atmosphere_arrays
+from .metrics import acquisition
 from .metrics import edge as edge_
 from .metrics import giqe as giqe_
 from .otf import system
@@ -52,7 +53,7 @@ OUTPUTS = outputs(
 _DECLARED = {**radiometry.SIGNAL_OUTPUTS, **noise.OUTPUTS, **radiometry.SENSITIVITY_OUTPUTS,
              **geometry.VIEW_OUTPUTS,
              **edge_.SLICE_OUTPUTS, **giqe_.OUTPUTS,
-             **quadrature.CUTOFF_OUTPUTS, **OUTPUTS}
+             **quadrature.CUTOFF_OUTPUTS, **acquisition.OUTPUTS, **OUTPUTS}
 
 
 # ---- the composition ---------------------------------------------------------------
@@ -193,6 +194,77 @@ def netd(sensor: xr.Dataset, scenario: xr.Dataset, m) -> xr.Dataset:
         contrast = ("snr", "snr_frame", "contrast_photoelectrons", "background_photoelectrons")
         values = {name: value for name, value in values.items() if name not in contrast}
         return ap.result({**values, "flags": flags}, atm, m)
+
+
+def _bars_chain(ap, m, values, noise_equivalent, frequency, knobs) -> dict:
+    """The bar-pattern threshold of ``noise_equivalent`` through the system MTF across bars.
+
+    ``values``: the SNR chain's result for the uniform scene (its spectral weights and
+    integration time give the OTF); ``frequency``: checked bar frequencies, None for 64
+    up to the finer axis' Nyquist frequency.
+    """
+    s, sc = ap.sensor, ap.scenario
+    spacing_x = s["pixel_pitch_x"] / s["focal_length"]
+    spacing_y = s["pixel_pitch_y"] / s["focal_length"]
+    if frequency is None:
+        nyquist = 0.5 / float(np.minimum(spacing_x, spacing_y).min())
+        frequency = np.linspace(0.0, nyquist, 65)[1:]
+    frequency = params.frequencies("frequency", params.labelled("frequency", frequency,
+                                                                "frequency"))
+    if "frequency" in frequency.coords:
+        frequency["frequency"].attrs.update(units="cycles/rad", long_name="bar frequency")
+    slant = geometry.slant_range(sc["ground_range"], sc["altitude"], form=m.geometry)
+    otf = system.system_components(
+        s, sc, frequency, spectral_weights=system.otf_weights(values["spectral_weights"]),
+        integration_time=values["effective_integration_time"], slant_range=slant, method=m)
+    mtf = abs(otf["system_unfiltered"])
+    threshold = acquisition.minimum_resolvable(noise_equivalent, mtf, spacing_x, spacing_y,
+                                               **knobs)
+    flags = ap.flag(values["flags"], "bars_unresolved", ~(mtf > 0.0))
+    nyquist = 0.5 / ap.orientations(spacing_x, spacing_y)
+    flags = ap.flag(flags, "bars_aliased", mtf["frequency"] > nyquist * (1.0 + 1e-12))
+    return {"threshold": threshold, "mtf": mtf, "flags": flags}
+
+
+def mrtd(sensor: xr.Dataset, scenario: xr.Dataset, m, frequency, knobs: dict) -> xr.Dataset:
+    """:func:`xbsm.mrtd` on checked inputs (the scene in the scenario's target) and knobs.
+
+    ``frequency``: checked bar frequencies, None for the default grid. Sweep-only (the
+    labelled applier): the SNR chain with the scene's NETD, the system OTF on the bar
+    frequencies, then the bar-pattern threshold.
+    """
+    ap = Labelled(sensor, scenario)
+    values, atm, _ = _snr_chain(ap, m, "scenario", sensitivity=True)
+    values["flags"] = ap.flag(values["flags"], "no_thermal_signal",
+                              ~(values["signal_derivative"] > 0.0))
+    bars = _bars_chain(ap, m, values, values["netd_frame"], frequency, knobs)
+    kept = ("netd", "netd_frame", "signal_derivative", "target_photoelectrons",
+            "effective_integration_time", "total_noise")
+    out = {"mrtd": bars["threshold"], "mtf": bars["mtf"],
+           **{name: values[name] for name in kept}, "flags": bars["flags"]}
+    return ap.result(out, atm, m, **{name: float(value) for name, value in knobs.items()})
+
+
+def mrc(sensor: xr.Dataset, scenario: xr.Dataset, m, frequency, knobs: dict) -> xr.Dataset:
+    """:func:`xbsm.mrc` on checked inputs (the scene as target, black as background), knobs.
+
+    The background is a black surface at the scene's temperature. The contrast
+    photoelectrons of the scene against black are N(r) - N(0) = r dN/dr (the
+    photoelectrons are linear in reflectance), the signal of a unit Weber contrast; the
+    noise is the scene's (the brighter), so the noise-equivalent contrast is 1 / snr_frame.
+    """
+    ap = Labelled(sensor, scenario)
+    values, atm, _ = _snr_chain(ap, m, "scenario")
+    nec = values["total_noise"] / values["contrast_photoelectrons"]
+    contrast = values["contrast_photoelectrons"]
+    values["flags"] = ap.flag(values["flags"], "no_reflective_signal", ~(contrast > 0.0))
+    nec = xr.where(contrast <= 0.0, np.inf, nec)  # NaN stays NaN (beyond the database)
+    bars = _bars_chain(ap, m, values, nec, frequency, knobs)
+    kept = ("target_photoelectrons", "effective_integration_time", "total_noise")
+    out = {"mrc": bars["threshold"], "mtf": bars["mtf"], "noise_equivalent_contrast": nec,
+           "reflectance_signal": values["contrast_photoelectrons"],
+           **{name: values[name] for name in kept}, "flags": bars["flags"]}
+    return ap.result(out, atm, m, **{name: float(value) for name, value in knobs.items()})
 
 
 def niirs(sensor: xr.Dataset, scenario: xr.Dataset, m, calibration,

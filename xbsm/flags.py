@@ -145,11 +145,30 @@ FLAGS = MappingProxyType({
         "radiometric results may be wrong (contrast SNR 16-22 % too high at 100 km and "
         "37-55 % at 549 km for a camera that does not fill its well)",
     ),
+    "bars_unresolved": (
+        16777216,
+        "the system MTF across the bars is zero or NaN at this bar frequency (beyond the "
+        "optics cutoff or at a zero of the OTF): the bars are not transmitted and the MRTD "
+        "is infinite (NaN where the MTF is NaN)",
+    ),
+    "bars_aliased": (
+        33554432,
+        "bar frequency above the sampling Nyquist frequency 1 / (2 x sample spacing) across "
+        "the bars: a sampled imager aliases the bars, and the MRTD formula, which ignores "
+        "sampling, is not a threshold for resolving them",
+    ),
+    "no_reflective_signal": (
+        67108864,
+        "the scene gives no more photoelectrons than a black surface at its temperature "
+        "(no reflected light in the band, or its own emission dominates): the "
+        "noise-equivalent contrast and the MRC are infinite or NaN",
+    ),
 })
 
 INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive", "rer_nonpositive",
            "blur_unresolved", "grd_unresolved", "upsampled", "image_nonfinite", "image_small",
-           "reference_unresolved", "no_thermal_signal", "atmosphere_inconsistent")
+           "reference_unresolved", "no_thermal_signal", "atmosphere_inconsistent",
+           "bars_unresolved", "bars_aliased", "no_reflective_signal")
 """Bits saying a number is NaN or may be wrong."""
 
 CALIBRATION = (
@@ -168,7 +187,7 @@ NOTICE = ("atmosphere_sparse", "well_fill_limited", "partial_spectral_coverage",
 """Bits that are neither: information about how a number was obtained."""
 
 INVALID_MASK = sum(FLAGS[name][0] for name in INVALID)
-"""OR of the :data:`INVALID` bits (11393665)."""
+"""OR of the :data:`INVALID` bits (128834177)."""
 
 CALIBRATION_MASK = sum(FLAGS[name][0] for name in CALIBRATION)
 """OR of the :data:`CALIBRATION` bits (4195704)."""

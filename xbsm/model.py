@@ -1,4 +1,4 @@
-"""The public doors of the model chain: ``snr``, ``netd``, ``niirs`` and ``system_otf``.
+"""The public doors of the model chain: snr, netd, mrtd, mrc, niirs and system_otf.
 
 Each checks its inputs, resolves the method and enters :mod:`xbsm._chain`, which
 composes the stages (parameters -> atmosphere -> radiometry -> noise -> (OTF ->
@@ -13,7 +13,8 @@ import xarray as xr
 
 from . import _chain, metrics, params
 from .methods import method as resolve_method
-from .params import Choice, Either, Instance, Resolved, check_inputs, contract
+from .metrics import acquisition
+from .params import POSITIVE, Choice, Either, Instance, Resolved, Spec, check_inputs, contract
 from .radiometry import TARGETS, check_target_set, targets_on_scenario
 
 _METHOD = Resolved(resolve_method)
@@ -112,6 +113,11 @@ def netd(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, tempera
     NER and NEI are the band-integrated radiance and irradiance changes, with the
     spectral shape of the Planck derivative at ``temperature``, that give SNR 1.
     """
+    return _chain.netd(sensor, _scene(sensor, scenario, temperature, reflectance), method)
+
+
+def _scene(sensor, scenario, temperature, reflectance) -> xr.Dataset:
+    """The checked scenario with its target and background replaced by a uniform scene."""
     if not isinstance(temperature, xr.DataArray) and np.ndim(temperature):
         temperature = params.labelled("temperature", temperature, "temperature")
     temperature = params.argument("temperature", temperature, ("temperature",))
@@ -122,7 +128,173 @@ def netd(sensor: xr.Dataset, scenario: xr.Dataset, method="accurate", *, tempera
     scenario = scenario.assign({name: value.assign_attrs(scenario[name].attrs)
                                 for name, value in scene.items()})
     check_inputs(sensor, scenario)
-    return _chain.netd(sensor, scenario, method)
+    return scenario
+
+
+_OBSERVER = {
+    "snr_threshold": Spec("1", "threshold SNR of the just-resolved bars", **POSITIVE),
+    "eye_integration_time": Spec("s", "integration time of the eye", **POSITIVE),
+    "frame_rate": Spec("Hz", "displayed frame rate", **POSITIVE),
+    "bar_aspect": Spec("1", "bar length over bar width", low=1.0),
+}
+
+
+@contract(method=_METHOD, **_OBSERVER)
+def mrtd(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method="accurate", *,
+         temperature=300.0, reflectance=0.0, snr_threshold=acquisition.SNR_THRESHOLD,
+         eye_integration_time=acquisition.EYE_INTEGRATION_TIME,
+         frame_rate=acquisition.FRAME_RATE, bar_aspect=acquisition.BAR_ASPECT):
+    r"""Minimum resolvable temperature difference of four-bar targets against bar frequency.
+
+    The classic static-performance-model MRTD of the sensor alone (no display, no eye
+    MTF, no eye contrast threshold): the single-frame NETD of :func:`netd` for the
+    uniform scene at ``temperature``, through the system MTF of :func:`system_otf`
+    (without the post-processing filter) across the bars, averaged by the observer over
+    one bar and ``eye_integration_time`` (:func:`xbsm.metrics.acquisition.minimum_resolvable`).
+
+    Parameters
+    ----------
+    sensor : xr.Dataset
+        From :func:`xbsm.sensor`.
+    scenario : xr.Dataset
+        From :func:`xbsm.scenario`: the path to the bars (a 2 m path for a laboratory
+        MRTD); its own target and background are replaced by the scene.
+    frequency : array_like or xr.DataArray, optional
+        Bar frequencies (one over the period of a bar and a space), in [0, inf) on dim
+        ``frequency``. Default: 64 frequencies up to the Nyquist frequency
+        1 / (2 pitch / focal length) of the finer axis. [cycles/rad]
+    method : str or Method
+        "accurate" (default), "fast" or "pybsm", or a :class:`xbsm.methods.Method`.
+    temperature : float, array_like or xr.DataArray
+        Temperature of the bars' background, in (0, inf); a 1-D sequence sweeps on dim
+        ``temperature``. [K]
+    reflectance : float or xr.DataArray
+        Scene reflectance in [0, 1] (emissivity 1 - reflectance). [1]
+    snr_threshold : float
+        SNR at which the observer just resolves the bars, in (0, inf); default 2.5. [1]
+    eye_integration_time : float
+        Time over which the eye adds frames, in (0, inf); default 0.1 s. [s]
+    frame_rate : float
+        Rate of independent displayed frames, in (0, inf); default 30 Hz. Stacked frames
+        (``frame_stacks``) are not counted again: the NETD used is the single frame's. [Hz]
+    bar_aspect : float
+        Bar length over bar width, in [1, inf); default 7 (the standard four-bar
+        target). [1]
+
+    Returns
+    -------
+    xr.Dataset
+        ``mrtd`` [K] and ``mtf`` (the system MTF across the bars) over ``orientation``
+        (x: bars modulated along x; y: along y), ``frequency`` and every sweep dim;
+        the scene's ``netd``, ``netd_frame``, ``signal_derivative``,
+        ``target_photoelectrons``, ``effective_integration_time``, ``total_noise``;
+        ``flags`` (those of :func:`netd`, ``bars_unresolved`` where the MTF is 0 and the
+        MRTD inf, ``bars_aliased`` above the Nyquist frequency across the bars). The
+        observer's knobs are attributes.
+
+    Notes
+    -----
+    .. math::
+
+        \mathrm{MRTD}(f) = \frac{\pi^2}{4\sqrt{7}}\,\mathrm{SNR_{th}}\,
+        \mathrm{NETD}\,\frac{f}{\mathrm{MTF}(f)}
+        \sqrt{\frac{\alpha\,\beta}{t_e\,F_R}}
+
+    alpha, beta the angular sample spacings (pitch / focal length), t_e the eye's
+    integration time, F_R the frame rate. This is the classic form
+    pi^2 / (4 sqrt(14)) SNR_th NETD f sqrt(alpha beta / (t_e F_R delta_f tau)) / MTF
+    (Ratches et al., NVL static performance model, 1975; reproduced in Holst,
+    *Electro-Optical Imaging System Performance*, and in FLIR92 / NVTherm) for a
+    staring detector, whose integrate-and-dump noise bandwidth gives delta_f tau = 1/2.
+    The derivation and its assumptions are in
+    :func:`xbsm.metrics.acquisition.minimum_resolvable`; the equation numbers of those
+    texts could not be checked with the search tools available to this project. As
+    f -> 0, MRTD / f -> (pi^2 / (4 sqrt 7)) SNR_th NETD sqrt(alpha beta / (t_e F_R)):
+    without an eye model the MRTD falls to 0 at low frequency, where a measured one
+    rises.
+    """
+    scenario = _scene(sensor, scenario, temperature, reflectance)
+    knobs = {"snr_threshold": snr_threshold, "eye_integration_time": eye_integration_time,
+             "frame_rate": frame_rate, "bar_aspect": bar_aspect}
+    return _chain.mrtd(sensor, scenario, method, _bar_frequencies(frequency), knobs)
+
+
+def _bar_frequencies(frequency):
+    """Bar frequencies as given (None: the chain's default), each in [0, inf) cycles/rad."""
+    if frequency is None:
+        return None
+    frequency = params.labelled("frequency", frequency, "frequency")
+    bad = ~(frequency >= 0.0)  # NaN too
+    if bool(bad.any()):
+        raise ValueError("frequency must be in [0, inf) cycles/rad; got "
+                         f"{frequency.values[bad.values][0]!r}")
+    return frequency
+
+
+@contract(method=_METHOD, **_OBSERVER)
+def mrc(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method="accurate", *,
+        snr_threshold=acquisition.SNR_THRESHOLD,
+        eye_integration_time=acquisition.EYE_INTEGRATION_TIME,
+        frame_rate=acquisition.FRAME_RATE, bar_aspect=acquisition.BAR_ASPECT):
+    r"""Minimum resolvable contrast of four-bar targets against bar frequency.
+
+    The reflective-band counterpart of :func:`mrtd`: the same bar-pattern threshold
+    with the scene's single-frame noise-equivalent contrast in place of the NETD. The
+    scene is the scenario's background (its reflectance r and temperature); the
+    contrast is the Weber contrast (r_bars - r) / r of the bars' reflectance against it,
+    at the scene (the path's transmission and radiance lower it on the way, as in
+    :func:`snr`).
+
+    Parameters
+    ----------
+    sensor : xr.Dataset
+        From :func:`xbsm.sensor`.
+    scenario : xr.Dataset
+        From :func:`xbsm.scenario`: the path and the scene (``background_reflectance``,
+        ``background_temperature``); its target is not used.
+    frequency : array_like or xr.DataArray, optional
+        Bar frequencies in [0, inf) on dim ``frequency``; default as :func:`mrtd`.
+        [cycles/rad]
+    method : str or Method
+        "accurate" (default), "fast" or "pybsm", or a :class:`xbsm.methods.Method`.
+    snr_threshold, eye_integration_time, frame_rate, bar_aspect : float
+        The observer, as for :func:`mrtd` (defaults 2.5, 0.1 s, 30 Hz, 7).
+
+    Returns
+    -------
+    xr.Dataset
+        ``mrc`` [1] and ``mtf`` [1] over ``orientation`` and ``frequency`` and every sweep
+        dim; ``noise_equivalent_contrast`` [1] (one frame, one pixel);
+        ``reflectance_signal`` [count], the scene's photoelectrons over a black
+        surface's; ``target_photoelectrons`` (the scene's), ``effective_integration_time``,
+        ``total_noise``; ``flags`` (``bars_unresolved``, ``bars_aliased``,
+        ``no_reflective_signal`` where the scene is no brighter than black: MRC inf).
+
+    Notes
+    -----
+    .. math::
+
+        \mathrm{MRC}(f) = \frac{\pi^2}{4\sqrt{7}}\,\mathrm{SNR_{th}}\,
+        \mathrm{NEC}\,\frac{f}{\mathrm{MTF}(f)}\sqrt{\frac{\alpha\,\beta}{t_e\,F_R}},
+        \qquad \mathrm{NEC} = \frac{\sigma}{N(r) - N(0)}
+
+    sigma the scene's total noise, N the photoelectrons of a surface of reflectance r
+    at the scene's temperature (linear in r, so N(r) - N(0) = r dN/dr, the signal of
+    a unit Weber contrast). The derivation is :func:`mrtd`'s with contrast for
+    temperature; no published MRC formula of this form could be found with the
+    project's search tools (published MRC definitions are measurement procedures), so
+    this is xbsm's analogue, not a transcription. No display or eye model.
+    """
+    check_inputs(sensor, scenario)
+    black = {"target_temperature": scenario["background_temperature"],
+             "target_reflectance": scenario["background_reflectance"],
+             "background_reflectance": xr.zeros_like(scenario["background_reflectance"])}
+    scenario = scenario.assign({name: value.assign_attrs(scenario[name].attrs)
+                                for name, value in black.items()})
+    check_inputs(sensor, scenario)
+    knobs = {"snr_threshold": snr_threshold, "eye_integration_time": eye_integration_time,
+             "frame_rate": frame_rate, "bar_aspect": bar_aspect}
+    return _chain.mrc(sensor, scenario, method, _bar_frequencies(frequency), knobs)
 
 
 @contract(method=_METHOD, calibration=Resolved(metrics.giqe_calibrations), targets=_TARGETS)

@@ -1,4 +1,4 @@
-"""Image-quality metrics: edge response, RER, EHO, GRD and the GIQE versions.
+"""Image-quality metrics: edge response, RER, EHO, GRD, the GIQE versions and the MRTD.
 
 The stages follow the data flow, each in its own module:
 
@@ -8,13 +8,16 @@ The stages follow the data flow, each in its own module:
   contrast SNR.
 - :mod:`xbsm.metrics.giqe`: NIIRS from GIQE 3, 4 and 5, each version's
   calibration ranges, the validity flags and the sampling ratio Q.
+- :mod:`xbsm.metrics.acquisition`: the four-bar minimum resolvable temperature
+  difference from a NETD and an MTF (target-acquisition figures of merit).
 - :mod:`xbsm.metrics.pybsm_numerics`: NumPy's interpolation search, copied so
   that ``method="pybsm"`` reproduces pyBSM 0.16.1 bit for bit.
 
-Every public name of the first three is available here, e.g.
+Every public name of the first three and of ``acquisition`` is available here, e.g.
 ``xbsm.metrics.giqe5``.
 """
 
+from .acquisition import bar_constant, minimum_resolvable
 from .edge import (
     EHO_POSITIONS,
     RER_POSITIONS,
@@ -54,6 +57,7 @@ __all__ = [
     "INCH",
     "RER_POSITIONS",
     "GiqeCalibration",
+    "bar_constant",
     "edge_height_overshoot",
     "edge_response",
     "edge_terms",
@@ -65,6 +69,7 @@ __all__ = [
     "giqe_calibrations",
     "giqe_flags",
     "ground_resolved_distance",
+    "minimum_resolvable",
     "relative_edge_response",
     "sampling_q",
 ]
