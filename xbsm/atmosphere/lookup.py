@@ -155,7 +155,9 @@ def _atmosphere_kernel(altitude, ground_range, visibility, wavelength, *, path, 
     """Each component's spectrum and the validity flags of every scenario (numpy kernel).
 
     ``wavelength`` only gives the last axis of the spectra (it is the window's); ``path``
-    is the resolved database file, or None for the packaged one (found once per process).
+    is the resolved database file (resolved where the graph is built, so that a dask
+    worker reads the file of the caller's :func:`~xbsm.atmosphere.use_database`), or
+    None for the default one.
     """
     db = load_database(path)
     rule = RULES[interpolation]
@@ -327,7 +329,7 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation=None,
         _atmosphere_kernel, *inputs, wl, core=[[], [], [], ["wavelength"]],
         outputs=[("wavelength",)] * len(COMPONENTS) + [()],
         dtype=[np.float64] * len(COMPONENTS) + [np.int32],
-        path=None if path is None else str(database_path(path)), interpolation=interpolation,
+        path=str(database_path(path)), interpolation=interpolation,
         window=window)
     described = zip(VARIABLES, LONG_NAMES, UNITS, strict=True)
     data = {name: named(values, units, long_name)
