@@ -154,13 +154,24 @@ def test_validate_database_names_what_is_wrong_and_where(small, case, tmp_path):
     assert not (tmp_path / "broken.nc").exists()  # nothing written
 
 
+def test_the_shipped_tables_stop_at_the_geometric_horizon(shipped):
+    # a fact of pyBSM's fileDecoder.csv that the horizon check rests on: below the 550 km
+    # table, each altitude holds exactly the grid's ground ranges inside the spherical-Earth
+    # horizon (radius 6378.164 km, the paper's Sec. 2.6), from 8 at 2 m to all 97 at 8 km
+    db = atm.load_database()
+    for a, altitude in enumerate(db.altitude[:-1]):
+        inside = np.count_nonzero(db.ground_range <= atm.horizon(altitude))
+        assert (db.present[:, a].sum(axis=1) == inside).all(), altitude
+
+
 def test_a_table_beyond_the_horizon_is_refused(shipped):
-    # 2 m sees 5.05 km (spherical Earth, xbsm.constants.EARTH_RADIUS); the shipped table
-    # stops at 5 km (fileDecoder.csv). Fill 6 km with the 5 km spectrum: beyond the horizon.
+    # 2 m sees 5.05 km geometrically, 5.83 km with standard refraction (Earth radius x 4/3);
+    # fill 6 km (missing at 2 m in the shipped file) with the 5 km spectrum: refused
     two = shipped.sel(altitude=[2.0, 1000.0]).isel(ground_range=slice(0, 12)).copy(deep=True)
     assert np.isnan(two["atmosphere"].values[:, 0, 8]).all()  # 6 km: missing at 2 m
-    assert atm.horizon(2.0) == pytest.approx(np.sqrt(2 * 2.0 * xbsm.constants.EARTH_RADIUS),
-                                             rel=1e-6)
+    radius = xbsm.constants.EARTH_RADIUS
+    assert atm.horizon(2.0) == pytest.approx(np.sqrt(2 * 2.0 * radius), rel=1e-6)
+    assert atm.horizon(2.0, 4 / 3) == pytest.approx(np.sqrt(2 * 2.0 * radius * 4 / 3), rel=1e-6)
     two["atmosphere"].values[:, 0, 8] = two["atmosphere"].values[:, 0, 7]
     with pytest.raises(ValueError, match=r"ground_range=6000.0 m is beyond the horizon"):
         atm.validate_database(two)

@@ -57,20 +57,23 @@ _COORD_ATTRS = {
 }
 #: Wavelengths a database may hold: metres, so a grid in micrometres is caught. [m]
 _WAVELENGTH_LIMITS = (1e-7, 1e-4)
-#: Slack on the spherical-Earth horizon: the shipped 2 m table's last range, 5 km, is
-#: 1 % inside its horizon (5.05 km); a present range beyond horizon x (1 + this) is an error.
-_HORIZON_SLACK = 0.01
+#: A table may reach past the geometric horizon as far as the horizon of standard
+#: refraction (an Earth of 4/3 the radius: sqrt(4/3) = 1.155 x as far), which a
+#: radiative-transfer code with refraction may trace; a table further out is an error.
+_REFRACTED_RADIUS = 4.0 / 3.0
 _ORDER = ("visibility", "ihaze", "altitude", "ground_range", "component", "component_units",
           "component_long_name", "wavelength")
 
 
-def horizon(altitude):
+def horizon(altitude, radius_factor=1.0):
     """Ground range of the spherical-Earth horizon seen from ``altitude`` [m].
 
-    The sphere's radius is :data:`xbsm.constants.EARTH_RADIUS`. [m]
+    The sphere's radius is :data:`xbsm.constants.EARTH_RADIUS` times ``radius_factor``
+    (4/3: the effective Earth of standard refraction). [m]
     """
     altitude = np.asarray(altitude, dtype=np.float64)
-    return EARTH_RADIUS * np.arccos(EARTH_RADIUS / (EARTH_RADIUS + altitude))
+    radius = EARTH_RADIUS * radius_factor
+    return radius * np.arccos(radius / (radius + altitude))
 
 
 def from_tables(tables, *, visibility=None, altitude=None, ground_range=None,
@@ -235,7 +238,8 @@ def validate_database(cube: xr.Dataset) -> None:
     components :data:`~xbsm.atmosphere.database.COMPONENTS` in :data:`FILE_UNITS`;
     :data:`REQUIRED_ATTRS`; each (visibility, altitude, ground range) cell either wholly
     finite or wholly NaN; at each (visibility, altitude) the present ground ranges a prefix
-    of the grid that does not pass the spherical-Earth horizon; TRANS in [0, 1] and
+    of the grid that does not pass the horizon (standard refraction, :func:`horizon` with
+    ``radius_factor=4/3``); TRANS in [0, 1] and
     radiances >= 0 where present.
 
     Parameters
@@ -306,7 +310,7 @@ def _check_values(values, coords):
         raise ValueError(f"a table is either wholly present or wholly NaN; the cell "
                          f"{_cell((v, a, g, c, k), coords)} is NaN (or infinite) in a table "
                          "that has values")
-    reach = horizon(coords["altitude"]) * (1.0 + _HORIZON_SLACK)
+    reach = horizon(coords["altitude"], _REFRACTED_RADIUS)
     ground_range = coords["ground_range"]
     for v in range(present.shape[0]):
         for a in range(present.shape[1]):
@@ -322,8 +326,8 @@ def _check_values(values, coords):
             if n and ground_range[n - 1] > reach[a]:
                 raise ValueError(
                     f"at {_cell((v, a), coords)} ground_range={float(ground_range[n - 1])!r} m is "
-                    f"beyond the horizon ({horizon(coords['altitude'][a]):.6g} m on a sphere of "
-                    f"radius {EARTH_RADIUS:g} m): a sensor cannot see it; make it NaN")
+                    f"beyond the horizon ({reach[a]:.6g} m with standard refraction, an Earth "
+                    f"of radius 4/3 x {EARTH_RADIUS:g} m): a sensor cannot see it; make it NaN")
     trans = values[:, :, :, 0]
     bad = finite[:, :, :, 0] & ~((trans >= 0.0) & (trans <= 1.0))
     if bad.any():
