@@ -258,6 +258,8 @@ def test_scenario_accepts_the_visibilities_of_the_database_in_use(small, tmp_pat
         result = xbsm.snr(olson_sensor("nir"), scenario)
         with pytest.raises(ValueError, match=r"one of \(23.0, 10.0\) km"):
             xbsm.scenario(altitude=9000.0, ground_range=5000.0, visibility=5.0)
+        with pytest.raises(ValueError, match=r"visibility must be one of 23, 10 km; got 5.0"):
+            atm.atmosphere_at(9000.0, 5000.0, 5.0)
     shipped = xbsm.snr(olson_sensor("nir"), olson_scenario(ground_range=5000.0, visibility=5.0))
     np.testing.assert_array_equal(result["snr"].values, shipped["snr"].values)
 

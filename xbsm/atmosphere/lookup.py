@@ -27,6 +27,7 @@ from .database import (
     LONG_NAMES,
     UNITS,
     VARIABLES,
+    VISIBILITIES,
     database_path,
     database_wavelengths,
     load_database,
@@ -90,10 +91,11 @@ def _validate(altitude, ground_range, visibility, rule, db):
                 )
     bad = ~np.isin(visibility, db.visibility)
     if bad.any():
+        codes = " (MODTRAN IHAZE 1, 2)" if tuple(db.visibility) == VISIBILITIES else ""
         raise ValueError(
             "visibility must be one of "
             + ", ".join(f"{v:g}" for v in db.visibility)
-            + f" km (MODTRAN IHAZE 1, 2); got {float(visibility[bad].flat[0])!r}"
+            + f" km{codes}; got {float(visibility[bad].flat[0])!r}"
         )
 
 
