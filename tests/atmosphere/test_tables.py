@@ -234,6 +234,20 @@ def test_use_database_changes_what_snr_reads_by_the_closed_form(small, tmp_path)
     assert float(after["snr"]) < float(before["snr"])
 
 
+def test_use_database_reaches_a_sweep_through_the_labelled_chain(small, tmp_path):
+    # a sweep takes the labelled path (band_atmosphere -> atmosphere_at), not the
+    # single-scenario one: the contrast rate halves there too, at database nodes
+    sensor = olson_sensor("nir")
+    scenario = olson_scenario(ground_range=xr.DataArray([0.0, 5000.0, 20000.0],
+                                                        dims="ground_range"), visibility=23.0)
+    before = xbsm.snr(sensor, scenario)
+    with atm.use_database(_halved(small, tmp_path)):
+        after = xbsm.snr(sensor, scenario)
+    rate = [r["contrast_photoelectrons"] / r["effective_integration_time"]
+            for r in (after, before)]
+    np.testing.assert_allclose(rate[0].values, 0.5 * rate[1].values, rtol=1e-12)
+
+
 def test_use_database_is_seen_by_a_lazy_sweep_built_inside_the_block(small, tmp_path):
     path = _halved(small, tmp_path)
     ground_range = xr.DataArray([0.0, 5000.0], dims="ground_range").chunk(1)
