@@ -4,6 +4,8 @@ Run from the repository root with the project environment (see ``recipes/README.
 
     .venv/bin/python recipes/build_atmosphere.py            # build + fixture
     .venv/bin/python recipes/build_atmosphere.py --check    # build twice, compare sha256
+    .venv/bin/python recipes/build_atmosphere.py --verify-shipped  # rebuild, compare with
+                                                            # the committed atmosphere.nc
 
 What it does
 ------------
@@ -13,11 +15,13 @@ What it does
 2. Reads ``pybsm/atms/fileDecoder.csv`` (index, altitude [km], ground range [km], IHAZE)
    and every ``pybsm/atms/<index>.bin`` (float32, 1371 wavelengths x 5 columns, stored
    column by column, i.e. Fortran order).
-3. Writes ONE NetCDF4/HDF5 file with a single data variable ``atmosphere`` on dims
-   (visibility, altitude, ground_range, component, wavelength). The values are the raw
-   float32 numbers of the .bin files, bit for bit, in the database's native units
-   (TRANS unitless, radiances W/(sr cm^2 um)); cells with no database entry (beyond the
-   horizon; 550 km above ground range 0) are NaN.
+3. Builds the cube with the public builder, :func:`xbsm.atmosphere.from_tables` (which
+   validates it: docs/atmosphere.md, "The database file"), and writes it with
+   :func:`xbsm.atmosphere.write_database`: ONE NetCDF4/HDF5 file with a single data
+   variable ``atmosphere`` on dims (visibility, altitude, ground_range, component,
+   wavelength). The values are the raw float32 numbers of the .bin files, bit for bit,
+   in the database's native units (TRANS unitless, radiances W/(sr cm^2 um)); cells
+   with no database entry (beyond the horizon; 550 km above ground range 0) are NaN.
 4. Writes ``tests/fixtures/atmosphere_checksums.json``: per (visibility, altitude) slab,
    the number of ground ranges present, the decoder index of the first file, the
    sha256 of the concatenated raw bytes and a crc32 per spectrum, plus a few raw values.
@@ -60,10 +64,13 @@ import zlib
 from decimal import Decimal
 from pathlib import Path
 
-import netCDF4
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # the worktree's xbsm, also when run without PYTHONPATH
+
+from xbsm.atmosphere import from_tables, write_database  # noqa: E402
+
 CACHE = ROOT / "recipes" / "_cache" / "pybsm_wheel"
 WHEEL_NAME = "pybsm-0.16.1-py3-none-any.whl"
 WHEEL_SHA256 = "ad910922d0a33c033db2f29f0c80ebbfebe2870142c788de10bf5e8b74945ee9"
@@ -159,87 +166,49 @@ def read_database(wheel: Path):
     return altitude, ground_range, ihaze, cube, raw
 
 
-def write_netcdf(path: Path, altitude, ground_range, ihaze, cube, complevel: int = 4) -> None:
-    """Write the CF-compliant cube (deterministically: fixed order, no timestamps)."""
+def shipped_cube(altitude, ground_range, ihaze, cube):
+    """The shipped database as :func:`xbsm.atmosphere.from_tables` builds it (validated)."""
     wavelength = 1e-6 * np.linspace(0.3, 14.0, N_WAVELENGTH)  # exactly pyBSM's grid
     visibility = np.array([IHAZE_VISIBILITY_KM[int(h)] for h in ihaze])
-    with netCDF4.Dataset(path, "w", format="NETCDF4") as nc:
-        nc.setncatts({
-            "Conventions": "CF-1.10",
-            "title": "MODTRAN 5.2.1 radiative-transfer database of pyBSM 0.16.1 "
-                     "(sunny day, mid-latitude summer, rural aerosols)",
-            "source": "MODTRAN 5.2.1 runs distributed with pyBSM 0.16.1 "
-                      "(pybsm/atms/<index>.bin and fileDecoder.csv in "
-                      f"{WHEEL_NAME}, sha256 {WHEEL_SHA256})",
-            "institution": "Air Force Research Laboratory, Sensors Directorate (data); "
-                           "Kitware, Inc. (pyBSM maintainer)",
-            "references": "LeMaster, D. A. and Eismann, M. T., pyBSM: A Python package for "
-                          "modeling imaging systems, Proc. SPIE 10204 (2017), Appendix A; "
-                          "https://github.com/Kitware/pybsm",
-            "license": "Apache-2.0 (data from pyBSM 0.16.1, https://github.com/Kitware/pybsm;"
-                       " see NOTICE)",
-            "history": "recipes/build_atmosphere.py (xbsm): raw float32 spectra copied bit "
-                       "for bit from the pyBSM 0.16.1 wheel; no values changed",
-            "comment": "Altitude 32.5 m is the decoder's 0.0325 km; pyBSM 0.16.1 docstrings "
-                       "and load_database_atmosphere call it 32.55 m. The nadir space table "
-                       "is 550 km in the decoder (atmosphere_README.txt says 500 km); it "
-                       "exists only at ground range 0. Ground ranges stop at the "
-                       "spherical-Earth horizon of each altitude; missing cells are NaN.",
-            "surface_reflectance_of_database": 0.15,
-            **MODTRAN_ATTRS,
-        })
-        nc.createDimension("visibility", visibility.size)
-        nc.createDimension("altitude", altitude.size)
-        nc.createDimension("ground_range", ground_range.size)
-        nc.createDimension("component", len(COMPONENTS))
-        nc.createDimension("wavelength", wavelength.size)
-
-        var = nc.createVariable("visibility", "f8", ("visibility",))
-        var.setncatts({"units": "km", "long_name": "meteorological range (visibility)",
-                       "standard_name": "visibility_in_air"})
-        var[:] = visibility
-        var = nc.createVariable("ihaze", "i4", ("visibility",))
-        var.setncatts({"units": "1", "long_name": "MODTRAN IHAZE aerosol model code",
-                       "flag_values": ihaze.astype(np.int32),
-                       "flag_meanings": "rural_23km_visibility rural_5km_visibility"})
-        var[:] = ihaze
-        var = nc.createVariable("altitude", "f8", ("altitude",))
-        var.setncatts({"units": "m", "long_name": "sensor altitude above ground level",
-                       "standard_name": "height", "positive": "up",
-                       "comment": "32.5 m is stored as in fileDecoder.csv (0.0325 km); "
-                                  "pyBSM documents it as 32.55 m"})
-        var[:] = altitude
-        var = nc.createVariable("ground_range", "f8", ("ground_range",))
-        var.setncatts({"units": "m",
-                       "long_name": "ground range from the sensor nadir point to the target",
-                       "comment": "great-circle distance on the spherical Earth"})
-        var[:] = ground_range
-        var = nc.createVariable("component", str, ("component",))
-        var.setncatts({"long_name": "MODTRAN tape 7 column name"})
-        var[:] = np.array(COMPONENTS, dtype=object)
-        var = nc.createVariable("component_units", str, ("component",))
-        var.setncatts({"long_name": "units of the component (UDUNITS string)"})
-        var[:] = np.array(COMPONENT_UNITS, dtype=object)
-        var = nc.createVariable("component_long_name", str, ("component",))
-        var.setncatts({"long_name": "description of the component"})
-        var[:] = np.array(COMPONENT_LONG_NAMES, dtype=object)
-        var = nc.createVariable("wavelength", "f8", ("wavelength",))
-        var.setncatts({"units": "m", "long_name": "wavelength",
-                       "standard_name": "radiation_wavelength",
-                       "comment": "exactly 1e-6 * numpy.linspace(0.3, 14.0, 1371), the grid "
-                                  "pyBSM 0.16.1 attaches to the database"})
-        var[:] = wavelength
-
-        var = nc.createVariable(
-            "atmosphere", "f4",
-            ("visibility", "altitude", "ground_range", "component", "wavelength"),
-            zlib=True, complevel=complevel, shuffle=True, fill_value=np.float32(np.nan),
-            chunksizes=(1, 1, ground_range.size, len(COMPONENTS), wavelength.size),
-        )
-        var.setncatts({
+    attrs = {
+        "Conventions": "CF-1.10",
+        "title": "MODTRAN 5.2.1 radiative-transfer database of pyBSM 0.16.1 "
+                 "(sunny day, mid-latitude summer, rural aerosols)",
+        "source": "MODTRAN 5.2.1 runs distributed with pyBSM 0.16.1 "
+                  "(pybsm/atms/<index>.bin and fileDecoder.csv in "
+                  f"{WHEEL_NAME}, sha256 {WHEEL_SHA256})",
+        "institution": "Air Force Research Laboratory, Sensors Directorate (data); "
+                       "Kitware, Inc. (pyBSM maintainer)",
+        "references": "LeMaster, D. A. and Eismann, M. T., pyBSM: A Python package for "
+                      "modeling imaging systems, Proc. SPIE 10204 (2017), Appendix A; "
+                      "https://github.com/Kitware/pybsm",
+        "license": "Apache-2.0 (data from pyBSM 0.16.1, https://github.com/Kitware/pybsm;"
+                   " see NOTICE)",
+        "history": "recipes/build_atmosphere.py (xbsm): raw float32 spectra copied bit "
+                   "for bit from the pyBSM 0.16.1 wheel; no values changed",
+        "comment": "Altitude 32.5 m is the decoder's 0.0325 km; pyBSM 0.16.1 docstrings "
+                   "and load_database_atmosphere call it 32.55 m. The nadir space table "
+                   "is 550 km in the decoder (atmosphere_README.txt says 500 km); it "
+                   "exists only at ground range 0. Ground ranges stop at the "
+                   "spherical-Earth horizon of each altitude; missing cells are NaN.",
+        "surface_reflectance_of_database": 0.15,
+        **MODTRAN_ATTRS,
+    }
+    return from_tables(
+        cube, visibility=visibility, altitude=altitude, ground_range=ground_range,
+        wavelength=wavelength, ihaze=ihaze,
+        ihaze_meanings=["rural_23km_visibility", "rural_5km_visibility"],
+        component_units=COMPONENT_UNITS, component_long_names=COMPONENT_LONG_NAMES,
+        attrs=attrs,
+        coordinate_attrs={
+            "altitude": {"comment": "32.5 m is stored as in fileDecoder.csv (0.0325 km); "
+                                    "pyBSM documents it as 32.55 m"},
+            "wavelength": {"comment": "exactly 1e-6 * numpy.linspace(0.3, 14.0, 1371), the "
+                                      "grid pyBSM 0.16.1 attaches to the database"},
+        },
+        variable_attrs={
             "long_name": "MODTRAN 5.2.1 path transmittance and radiance components "
                          "(raw database values)",
-            "coordinates": "ihaze component_units component_long_name",
             "units_by_component": "see component_units: TRANS 1; PTH_THRML, SURF_EMIS, "
                                   "SOL_SCAT, GRND_RFLT W sr-1 cm-2 um-1",
             "comment": "Raw float32 values of pyBSM 0.16.1's pybsm/atms/*.bin files, bit for "
@@ -248,8 +217,14 @@ def write_netcdf(path: Path, altitude, ground_range, ihaze, cube, complevel: int
                        "by 1e10 (pyBSM divides the float32 value by float32(1e-10)) for "
                        "W m-2 sr-1 m-1; xbsm.open_atmosphere does this. NaN: no database "
                        "entry (beyond the horizon, or above ground range 0 at 550 km).",
-        })
-        var[:] = cube
+        },
+    )
+
+
+def write_netcdf(path: Path, altitude, ground_range, ihaze, cube, complevel: int = 4) -> None:
+    """Write the CF-compliant cube through the public builder (deterministic)."""
+    write_database(shipped_cube(altitude, ground_range, ihaze, cube), path,
+                   complevel=complevel)
 
 
 def sha256_file(path: Path) -> str:
@@ -306,6 +281,41 @@ def write_fixture(path: Path, altitude, ground_range, ihaze, cube, raw) -> None:
     path.write_text(json.dumps(fixture, indent=1) + "\n")
 
 
+def _contents(path: Path) -> dict:
+    """Every variable's bytes, dtype, dims, chunks, filters and attributes, in file order."""
+    import netCDF4
+
+    with netCDF4.Dataset(path) as nc:
+        nc.set_auto_maskandscale(False)
+        out = {"": [(k, repr(nc.getncattr(k))) for k in nc.ncattrs()],
+               "_NCProperties": nc.getncattr("_NCProperties")}
+        for name, var in nc.variables.items():
+            data = var[...]
+            raw = data.tobytes() if data.dtype != object else repr(list(data)).encode()
+            out[name] = (str(var.dtype), var.dimensions,
+                         [(k, repr(var.getncattr(k))) for k in var.ncattrs()],
+                         var.chunking(), var.filters(), hashlib.sha256(raw).hexdigest())
+    return out
+
+
+def verify_shipped(altitude, ground_range, ihaze, cube, complevel: int) -> int:
+    """Rebuild through the public builder and compare with the committed atmosphere.nc."""
+    shipped = ROOT / "atmosphere.nc"
+    with tempfile.TemporaryDirectory() as tmp:
+        again = Path(tmp) / "atmosphere.nc"
+        write_netcdf(again, altitude, ground_range, ihaze, cube, complevel)
+        same_file = sha256_file(again) == sha256_file(shipped)
+        mine, theirs = _contents(again), _contents(shipped)
+    libraries = mine.pop("_NCProperties"), theirs.pop("_NCProperties")
+    print(f"rebuilt with {libraries[0]}; {shipped.name} written with {libraries[1]}")
+    print(f"sha256 {'identical' if same_file else 'DIFFERENT'}; variables and attributes "
+          f"{'identical' if mine == theirs else 'DIFFERENT'}")
+    for name in sorted(set(mine) | set(theirs)):
+        if mine.get(name) != theirs.get(name):
+            print(f"  differs: {name or 'global attributes'}")
+    return 0 if mine == theirs and (same_file or libraries[0] != libraries[1]) else 1
+
+
 def main(argv=None) -> int:
     """Build atmosphere.nc and the checksum fixture (``--check``: build twice, compare)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -315,9 +325,15 @@ def main(argv=None) -> int:
     parser.add_argument("--complevel", type=int, default=4)
     parser.add_argument("--check", action="store_true",
                         help="also build a second copy in a temporary folder and compare sha256")
+    parser.add_argument("--verify-shipped", action="store_true",
+                        help="only rebuild into a temporary folder and compare with the "
+                             "committed atmosphere.nc (sha256, else every variable's bytes and "
+                             "every attribute)")
     args = parser.parse_args(argv)
 
     altitude, ground_range, ihaze, cube, raw = read_database(fetch_wheel())
+    if args.verify_shipped:
+        return verify_shipped(altitude, ground_range, ihaze, cube, args.complevel)
     write_netcdf(args.output, altitude, ground_range, ihaze, cube, args.complevel)
     write_fixture(args.fixture, altitude, ground_range, ihaze, cube, raw)
     digest = sha256_file(args.output)

@@ -152,6 +152,14 @@ NOT_LABELLED = MappingProxyType({
     "component and are in its component_units coordinate (docs/atmosphere.md)",
     "xbsm.atmosphere.lookup.band_wavelengths": "returns a numpy array",
     "xbsm.atmosphere.database.database_path": "returns a path",
+    "xbsm.atmosphere.database.use_database": "a context manager; yields a path",
+    "xbsm.atmosphere.database.check_supported": "a validator: returns None or raises",
+    "xbsm.atmosphere.database.database_visibilities": "returns a tuple of floats",
+    "xbsm.atmosphere.tables.from_tables": "the raw database cube in the file's schema; units "
+    "differ by component and are in its component_units coordinate (docs/atmosphere.md)",
+    "xbsm.atmosphere.tables.validate_database": "a validator: returns None or raises",
+    "xbsm.atmosphere.tables.write_database": "writes a file; returns its path",
+    "xbsm.atmosphere.tables.horizon": "returns a numpy array (the geometry of the checks)",
     "xbsm.atmosphere.database.database_wavelengths": "returns a numpy array",
     "xbsm.atmosphere.database.load_database": "returns the database's numpy arrays",
     "xbsm.atmosphere.lookup.interpolate_database": "a kernel: plain numpy arrays in and out "
@@ -210,7 +218,7 @@ NOT_LABELLED = MappingProxyType({
 })
 """Public functions whose result is not a labelled quantity, with the reason."""
 
-MODULES = (atmosphere.database, atmosphere.rules, atmosphere.lookup,
+MODULES = (atmosphere.database, atmosphere.rules, atmosphere.lookup, atmosphere.tables,
            geometry, noise, quadrature, radiometry, xbsm.model,
            metrics.edge, metrics.grd, metrics.giqe, metrics.acquisition,
            aperture, defocus, detector, filters, motion, psf, spectral, system, turbulence,

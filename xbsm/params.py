@@ -36,6 +36,7 @@ from .atmosphere.database import (  # the database's facts, re-exported where th
     VISIBILITIES,
     WAVELENGTH_MAX,
     WAVELENGTH_MIN,
+    database_visibilities,
 )
 
 
@@ -915,10 +916,12 @@ def scenario(
         values["cn2_profile"] = _profile_table(values, cn2_profile)
     vis = values["visibility"]
     if vis.chunks is None:
-        unknown = ~np.isin(vis.values, VISIBILITIES)
+        held = database_visibilities()  # the database in use (xbsm.atmosphere.use_database)
+        unknown = ~np.isin(vis.values, held)
         if np.any(unknown):
+            codes = " (MODTRAN IHAZE 1, 2)" if held == VISIBILITIES else ""
             raise ValueError(
-                f"visibility must be one of {VISIBILITIES} km (MODTRAN IHAZE 1, 2); "
+                f"visibility must be one of {held} km{codes}, the atmosphere database's; "
                 f"got {vis.values[unknown].ravel()[0]!r}"
             )
     return _finish(values, "scenario")

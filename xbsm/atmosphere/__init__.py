@@ -10,7 +10,10 @@ The package, in data-flow order: :mod:`~xbsm.atmosphere.database` (the file, its
 the cube in memory), :mod:`~xbsm.atmosphere.rules` (the dispatch table of named rules and
 the fixed-range steps), the private line-of-sight machinery, optical-depth cubic and
 extinction profile, and :mod:`~xbsm.atmosphere.lookup` (:func:`atmosphere_at`,
-:func:`band_atmosphere`, :func:`interpolate_database`). Every public name of those
+:func:`band_atmosphere`, :func:`interpolate_database`); :mod:`~xbsm.atmosphere.tables`
+builds, validates and writes a database file from anyone's tables
+(:func:`from_tables`, :func:`write_database`), and :func:`use_database` makes such a
+file the default inside a ``with`` block. Every public name of those
 modules is importable from ``xbsm.atmosphere``, on first use (PEP 562), so that
 :mod:`xbsm.params` and :mod:`xbsm.flags` can read the database's facts without importing
 the interpolation.
@@ -75,15 +78,21 @@ _PUBLIC = {
     "database": "database",
     "rules": "rules",
     "lookup": "lookup",
+    "tables": "tables",
     **{name: "database" for name in (
         "ALTITUDES", "ALTITUDE_GAP", "ALTITUDE_RANGE", "COMPONENTS", "GROUND_RANGES",
-        "GROUND_RANGE_RANGE", "IHAZE", "LONG_NAMES", "UNITS", "VARIABLES", "VISIBILITIES",
+        "GROUND_RANGE_RANGE", "IHAZE", "LONG_NAMES", "SURFACE_REFLECTANCE", "UNITS",
+        "VARIABLES", "VISIBILITIES",
         "WAVELENGTH_MAX", "WAVELENGTH_MIN", "Database", "database_path",
-        "database_wavelengths", "load_database", "open_atmosphere")},
+        "database_wavelengths", "load_database", "open_atmosphere", "use_database",
+        "check_supported", "database_visibilities")},
     **{name: "rules" for name in ("INTERPOLATIONS", "RULES", "SCALE_HEIGHT", "Rule")},
     **{name: "lookup" for name in (
         "RELATIVE_EDGE_TOLERANCE", "WAVELENGTH_ATTRS", "atmosphere_at", "band_atmosphere",
         "band_atmosphere_arrays", "band_wavelengths", "interpolate_database")},
+    **{name: "tables" for name in (
+        "DIMS", "FILE_UNITS", "REQUIRED_ATTRS", "from_tables", "horizon", "validate_database",
+        "write_database")},
 }
 
 __all__ = list(_PUBLIC)

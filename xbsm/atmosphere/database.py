@@ -13,7 +13,10 @@ from here; ``tests/atmosphere/test_atmosphere.py`` checks them against the file.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import functools
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
@@ -31,16 +34,20 @@ __all__ = [
     "GROUND_RANGE_RANGE",
     "IHAZE",
     "LONG_NAMES",
+    "SURFACE_REFLECTANCE",
     "UNITS",
     "VARIABLES",
     "VISIBILITIES",
     "WAVELENGTH_MAX",
     "WAVELENGTH_MIN",
     "Database",
+    "check_supported",
     "database_path",
+    "database_visibilities",
     "database_wavelengths",
     "load_database",
     "open_atmosphere",
+    "use_database",
 ]
 
 # ---- the facts (pyBSM 0.16.1's database, paper Appendix A; tests check them against the file)
@@ -83,6 +90,11 @@ GROUND_RANGE_RANGE = (GROUND_RANGES[0], GROUND_RANGES[-1])
 #: The altitudes with no table in between (24.5 km and 550 km): above the first, only ground
 #: range 0 is interpolated, and the line-of-sight rules fall back to fixed ground range. [m]
 ALTITUDE_GAP = (ALTITUDES[-2], ALTITUDES[-1])
+#: Surface reflectance of the database's GRND_RFLT (the file's attribute
+#: ``surface_reflectance_of_database``); the radiometry rescales GRND_RFLT by the target's
+#: reflectance over it (its own constant ``xbsm.radiometry.DATABASE_REFLECTANCE``, which a
+#: test checks equal to this).
+SURFACE_REFLECTANCE = 0.15
 #: Shortest wavelength of the database. [m]
 WAVELENGTH_MIN = 0.3e-6
 #: Longest wavelength of the database. [m]
@@ -95,14 +107,20 @@ _DIVISOR.flags.writeable = False
 _FILE_CHUNKS = MappingProxyType({})  # xarray: use the file's chunks
 
 
+#: The database file :func:`use_database` made the default in this context (None: the
+#: packaged one).
+_ACTIVE = contextvars.ContextVar("xbsm_atmosphere_database", default=None)
+
+
 def database_path(path=None) -> Path:
     """Path of the atmosphere database file.
 
     Parameters
     ----------
     path : str or os.PathLike, optional
-        Explicit file. Default: ``xbsm/data/atmosphere.nc`` (installed wheel),
-        else ``atmosphere.nc`` at the top of a source checkout.
+        Explicit file. Default: the file of the enclosing :func:`use_database`, else
+        ``xbsm/data/atmosphere.nc`` (installed wheel), else ``atmosphere.nc`` at the top
+        of a source checkout.
 
     Returns
     -------
@@ -110,8 +128,116 @@ def database_path(path=None) -> Path:
         Resolved path of an existing file.
     """
     if path is None:
-        return _default_database()
+        return _ACTIVE.get() or _default_database()
     return _existing([Path(path)])
+
+
+@contextlib.contextmanager
+def use_database(path):
+    """Make another atmosphere database file the default inside a ``with`` block.
+
+    Every function that reads the database without an explicit ``path`` (``xbsm.snr``,
+    ``xbsm.niirs``, :func:`~xbsm.atmosphere.atmosphere_at`, studies and their provenance)
+    uses ``path`` inside the block; the file is validated on entry
+    (:func:`~xbsm.atmosphere.validate_database`) and checked against what the code
+    supports (:func:`check_supported`); :func:`xbsm.scenario` then accepts the file's
+    visibilities. The setting is a context variable: it holds in
+    this thread (and in dask graphs built inside the block, which carry the resolved
+    path), not in threads started elsewhere.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file :func:`~xbsm.atmosphere.write_database` wrote.
+
+    Yields
+    ------
+    pathlib.Path
+        The resolved file.
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    ValueError
+        A file that breaks the database contract or that the code does not support yet.
+
+    Examples
+    --------
+    >>> with xbsm.atmosphere.use_database("my_tables.nc"):  # doctest: +SKIP
+    ...     result = xbsm.snr(sensor, scenario)
+    """
+    resolved = _existing([Path(path)])
+    check_supported(resolved)
+    token = _ACTIVE.set(resolved)
+    try:
+        yield resolved
+    finally:
+        _ACTIVE.reset(token)
+
+
+def check_supported(path) -> None:
+    """Raise ValueError if a valid database file needs what the code does not do yet.
+
+    The parameter limits (:mod:`xbsm.params`) and the flags are the shipped database's:
+    a file is supported where its coordinates lie inside them. Checked: the file is a
+    valid database (:func:`~xbsm.atmosphere.validate_database`); visibilities within
+    [min, max] of :data:`VISIBILITIES`; altitudes within
+    :data:`ALTITUDE_RANGE` and none strictly between the two of :data:`ALTITUDE_GAP`
+    (the flags ``atmosphere_sparse`` and ``atmosphere_inconsistent`` and the
+    line-of-sight rules' limit are that gap's); ground ranges within
+    :data:`GROUND_RANGE_RANGE`; wavelengths within [:data:`WAVELENGTH_MIN`,
+    :data:`WAVELENGTH_MAX`] (the band-edge limits); at least two wavelengths; the
+    attribute ``surface_reflectance_of_database`` equal to :data:`SURFACE_REFLECTANCE`
+    (0.15, :data:`xbsm.radiometry.DATABASE_REFLECTANCE`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The database file.
+
+    Raises
+    ------
+    ValueError
+        Naming the coordinate, its values and what is supported.
+    """
+    import xarray as xr
+
+    from .tables import validate_database  # tables imports this module
+
+    load_database(path)  # a clear error for a file that is not a database at all
+    with xr.open_dataset(path, engine="netcdf4", chunks=None) as ds:
+        validate_database(ds.load())
+        altitude, ground_range, wavelength = (
+            np.asarray(ds[name].values, dtype=np.float64)
+            for name in ("altitude", "ground_range", "wavelength"))
+    visibility = np.asarray(ds["visibility"].values, dtype=np.float64)[::-1]  # increasing
+    limits = (("visibility", visibility, (min(VISIBILITIES), max(VISIBILITIES)), "km"),
+              ("altitude", altitude, ALTITUDE_RANGE, "m"),
+              ("ground_range", ground_range, GROUND_RANGE_RANGE, "m"),
+              ("wavelength", wavelength, (WAVELENGTH_MIN, WAVELENGTH_MAX), "m"))
+    for name, values, (lo, hi), units in limits:
+        if values[0] < lo or values[-1] > hi:
+            raise ValueError(
+                f"{path}: coordinate {name} spans [{values[0]:g}, {values[-1]:g}] {units}; xbsm "
+                f"supports only [{lo:g}, {hi:g}] {units} yet (the parameter limits are the "
+                "shipped database's)")
+    with netCDF4.Dataset(path) as nc:
+        reflectance = float(nc.getncattr("surface_reflectance_of_database"))
+    if reflectance != SURFACE_REFLECTANCE:
+        raise ValueError(
+            f"{path}: attribute surface_reflectance_of_database is {reflectance!r}; xbsm "
+            f"rescales GRND_RFLT by the target reflectance over {SURFACE_REFLECTANCE!r} "
+            "(xbsm.radiometry.DATABASE_REFLECTANCE) and supports no other value yet")
+    gap = altitude[(altitude > ALTITUDE_GAP[0]) & (altitude < ALTITUDE_GAP[1])]
+    if gap.size:
+        raise ValueError(
+            f"{path}: altitude {gap[0]:g} m lies between {ALTITUDE_GAP[0]:g} m and "
+            f"{ALTITUDE_GAP[1]:g} m; xbsm does not support tables there yet (its flags and "
+            "line-of-sight rules assume the shipped database's gap)")
+    if wavelength.size < 2:
+        raise ValueError(f"{path}: coordinate wavelength has {wavelength.size} value(s); a "
+                         "band needs at least two")
 
 
 @functools.cache
@@ -159,7 +285,7 @@ def open_atmosphere(path=None, chunks=_FILE_CHUNKS) -> xr.Dataset:
     stored value.
     """
     file = str(database_path(path))
-    _read(file)  # a clear error for a file that is not the database
+    load_database(file)  # a clear error for a file that is not the database
     if isinstance(chunks, MappingProxyType):
         with netCDF4.Dataset(file) as nc:
             chunks = dict(zip(nc["atmosphere"].dimensions, nc["atmosphere"].chunking(),
@@ -227,12 +353,22 @@ def load_database(path=None) -> Database:
     ValueError
         A file that is not a readable xbsm atmosphere database.
     """
-    return _read(str(database_path(path)))
+    file = database_path(path)
+    return _read(str(file), _stamp(file))
+
+
+def _stamp(file: Path):
+    """Size and modification time of ``file``: a rewritten file is read again."""
+    try:
+        stat = os.stat(file)
+    except OSError:
+        return None
+    return stat.st_size, stat.st_mtime_ns
 
 
 @functools.lru_cache(maxsize=4)
-def _read(path: str) -> Database:
-    """Read the database file ``path`` into memory (once per process and path)."""
+def _read(path: str, stamp=None) -> Database:
+    """Read the database file ``path`` into memory (once per process, path and stamp)."""
     try:
         with netCDF4.Dataset(path) as nc:
             nc.set_auto_maskandscale(False)
@@ -257,6 +393,33 @@ def _read(path: str) -> Database:
     cube.setflags(write=False)
     present.setflags(write=False)
     return Database(cube=cube, present=present, **coords)
+
+
+def database_visibilities(path=None) -> tuple:
+    """Visibilities of the atmosphere database in use, in its order [km].
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        Database file; see :func:`database_path` (default: the one in use).
+
+    Returns
+    -------
+    tuple of float
+        The file's ``visibility`` coordinate (read without the cube, once per file).
+    """
+    file = database_path(path)
+    return _visibilities(str(file), _stamp(file))
+
+
+@functools.lru_cache(maxsize=4)
+def _visibilities(path: str, stamp=None) -> tuple:
+    """The ``visibility`` coordinate of ``path`` (or :func:`load_database`'s error)."""
+    try:
+        with netCDF4.Dataset(path) as nc:
+            return tuple(float(v) for v in np.asarray(nc["visibility"][...], dtype=np.float64))
+    except (OSError, RuntimeError, KeyError, IndexError):
+        return tuple(float(v) for v in load_database(path).visibility)  # raises the error
 
 
 def database_wavelengths(path=None) -> np.ndarray:

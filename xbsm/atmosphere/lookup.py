@@ -27,6 +27,7 @@ from .database import (
     LONG_NAMES,
     UNITS,
     VARIABLES,
+    VISIBILITIES,
     database_path,
     database_wavelengths,
     load_database,
@@ -90,10 +91,11 @@ def _validate(altitude, ground_range, visibility, rule, db):
                 )
     bad = ~np.isin(visibility, db.visibility)
     if bad.any():
+        codes = " (MODTRAN IHAZE 1, 2)" if tuple(db.visibility) == VISIBILITIES else ""
         raise ValueError(
             "visibility must be one of "
             + ", ".join(f"{v:g}" for v in db.visibility)
-            + f" km (MODTRAN IHAZE 1, 2); got {float(visibility[bad].flat[0])!r}"
+            + f" km{codes}; got {float(visibility[bad].flat[0])!r}"
         )
 
 
@@ -155,7 +157,9 @@ def _atmosphere_kernel(altitude, ground_range, visibility, wavelength, *, path, 
     """Each component's spectrum and the validity flags of every scenario (numpy kernel).
 
     ``wavelength`` only gives the last axis of the spectra (it is the window's); ``path``
-    is the resolved database file, or None for the packaged one (found once per process).
+    is the resolved database file (resolved where the graph is built, so that a dask
+    worker reads the file of the caller's :func:`~xbsm.atmosphere.use_database`), or
+    None for the default one.
     """
     db = load_database(path)
     rule = RULES[interpolation]
@@ -327,7 +331,7 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation=None,
         _atmosphere_kernel, *inputs, wl, core=[[], [], [], ["wavelength"]],
         outputs=[("wavelength",)] * len(COMPONENTS) + [()],
         dtype=[np.float64] * len(COMPONENTS) + [np.int32],
-        path=None if path is None else str(database_path(path)), interpolation=interpolation,
+        path=str(database_path(path)), interpolation=interpolation,
         window=window)
     described = zip(VARIABLES, LONG_NAMES, UNITS, strict=True)
     data = {name: named(values, units, long_name)

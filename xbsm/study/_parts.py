@@ -39,13 +39,16 @@ _MEANING = {"layout": "the result's variables, shapes or coordinates",
             "scipy": "the scipy version"}
 
 
-@functools.lru_cache(maxsize=4)
 def atmosphere_checksum(path=None) -> str:
-    """SHA-256 of the atmosphere database file, for the provenance of a result."""
-    return _file_digest(database_path(path))
+    """SHA-256 of the atmosphere database file (default: the one in use), for provenance."""
+    file = database_path(path)
+    stat = file.stat()
+    return _file_digest(file, stat.st_size, stat.st_mtime_ns)
 
 
-def _file_digest(path: Path) -> str:
+@functools.lru_cache(maxsize=4)
+def _file_digest(path: Path, size: int, mtime_ns: int) -> str:
+    """SHA-256 of ``path`` (cached per size and modification time: a rewrite is re-read)."""
     digest = hashlib.sha256()
     with open(path, "rb") as handle:
         for block in iter(lambda: handle.read(1 << 22), b""):
