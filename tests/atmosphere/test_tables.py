@@ -89,6 +89,11 @@ def test_from_tables_takes_a_data_array_with_its_coordinates_and_conditions(smal
     np.testing.assert_array_equal(cube["altitude"].values, SUBSET["altitude"])
 
 
+def _without_source(ds):
+    ds.attrs.pop("source")
+    return ds
+
+
 def _coordinate(ds, name, values):
     return ds.assign_coords({name: (ds[name].dims, values, ds[name].attrs)})
 
@@ -138,8 +143,8 @@ BROKEN = {
     "SI radiance units": (
         lambda ds: _coordinate(ds, "component_units", ["1"] + ["W m-2 sr-1 m-1"] * 4),
         "component_units must be"),
-    "no source": (lambda ds: ds.drop_attrs(deep=False).assign_attrs(
-        {k: v for k, v in ds.attrs.items() if k != "source"}),
+    # (not Dataset.drop_attrs: xarray 2023.12, the floor, lacks it)
+    "no source": (lambda ds: ds.copy().assign_attrs(source=None).pipe(_without_source),
         "lacks the global attribute(s) source"),
 }
 
