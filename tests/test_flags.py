@@ -7,6 +7,7 @@ import warnings
 import numpy as np
 import pytest
 import xarray as xr
+from scipy.integrate import trapezoid  # numpy.trapezoid needs numpy 2
 
 import xbsm
 from xbsm import flags, study
@@ -134,6 +135,6 @@ def _dense_rer(sensor, scenario, method, samples=2**16):
                      float(sensor.pixel_pitch_y / sensor.focal_length)])[:, None]
     kernel = np.full((2, f.size), np.pi * ifov)  # sin(pi f ifov) / f -> pi ifov at f = 0
     kernel[:, 1:] = np.sin(np.pi * f[1:] * ifov) / f[1:]
-    fine, coarse = (np.trapezoid(h[:, ::k] * kernel[:, ::k], f[::k], axis=-1) * 2 / np.pi
+    fine, coarse = (trapezoid(h[:, ::k] * kernel[:, ::k], f[::k], axis=-1) * 2 / np.pi
                     for k in (1, 2))
     return fine + (fine - coarse) / 3

@@ -176,11 +176,12 @@ def test_kronrod_panels_are_uniform_then_graded_then_one_per_drift_lobe():
 
 
 def test_kronrod_nodes_match_quadpack_and_integrate_to_their_degree():
-    # QUADPACK qk15 (Piessens et al. 1983): the largest Kronrod node and its weight
+    # QUADPACK qk15 (Piessens et al. 1983): the largest Kronrod node and its weight, to a
+    # few ulps (numpy 1.24, the floor, rounds the weight 1.05e-15 away from numpy 2's)
     t, vk, vg = quadrature.kronrod_nodes(7)
-    assert t[-1] == pytest.approx(0.991455371120812639206854697526329, abs=1e-15)
-    assert vk[-1] == pytest.approx(0.022935322010529224963732008058970, abs=1e-15)
-    assert vg[7] == pytest.approx(0.417959183673469387755102040816327, abs=1e-15)  # G7 centre
+    assert t[-1] == pytest.approx(0.991455371120812639206854697526329, abs=4e-15)
+    assert vk[-1] == pytest.approx(0.022935322010529224963732008058970, abs=4e-15)
+    assert vg[7] == pytest.approx(0.417959183673469387755102040816327, abs=4e-15)  # G7 centre
     for n in (3, 4, 7):
         t, vk, vg = quadrature.kronrod_nodes(n)
         for k in range(3 * n + 2):

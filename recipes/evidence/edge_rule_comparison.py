@@ -51,6 +51,7 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from scipy.integrate import trapezoid  # numpy.trapezoid needs numpy 2
 
 import xbsm
 from xbsm import metrics
@@ -118,7 +119,7 @@ def dense_edge(sensor, scenario, method, samples=2**17):
         kernel[..., 0] = 2 * np.pi * ifov[:, None] * POSITIONS  # sin(2 pi f ifov x) / f, f -> 0
         kernel[..., 1:] = (np.sin(2 * np.pi * ff[1:] * ifov[:, None, None] * POSITIONS[:, None])
                            / ff[1:])
-        out.append(0.5 + np.trapezoid(hh[:, None, :] * kernel, ff, axis=-1) / np.pi)
+        out.append(0.5 + trapezoid(hh[:, None, :] * kernel, ff, axis=-1) / np.pi)
     return out[0] + (out[0] - out[1]) / 3
 
 

@@ -13,6 +13,7 @@ import warnings
 import numpy as np
 import pytest
 import xarray as xr
+from scipy.integrate import trapezoid  # numpy.trapezoid needs numpy 2
 from scipy.special import erf
 
 import xbsm
@@ -38,7 +39,7 @@ def dense_rer(sensor, scenario, method, samples=2**16):
     kernel = np.empty((2, f.size))
     kernel[:, 0] = np.pi * ifov[:, 0]  # the limit of sin(pi f ifov) / f at f = 0
     kernel[:, 1:] = np.sin(np.pi * f[1:] * ifov) / f[1:]
-    fine, coarse = (np.trapezoid(h[:, ::k] * kernel[:, ::k], f[::k], axis=-1) * 2 / np.pi
+    fine, coarse = (trapezoid(h[:, ::k] * kernel[:, ::k], f[::k], axis=-1) * 2 / np.pi
                     for k in (1, 2))
     return fine + (fine - coarse) / 3
 
