@@ -146,16 +146,16 @@ def test_a_point_with_no_drawn_neighbour_is_marked_whatever_its_style(result, tm
     # the legend's long labels are wrapped to fit the figure's width side by side
     (legend,) = fig.legends
     chars = max(len(line) for text in legend.get_texts() for line in text.get_text().split("\n"))
-    assert chars * legend._ncols <= fig.get_figwidth() * 11
+    assert chars * legend._ncols <= fig.get_figwidth() * 16
 
 
 def test_legend_columns_fit_the_figure_width():
     from xbsm.plot._layout import legend_columns
 
-    assert legend_columns(["a", "b", "c", "d"], 6.0) == (3, 16)  # 66 chars a line, 3 columns
-    # 43-character labels (+6 for the handle): two abreast in 99 characters, not three
-    assert legend_columns(["x" * 43, "y" * 43, "z" * 43], 9.0) == (2, 43)
-    assert legend_columns(["x" * 60], 2.0) == (1, 16)  # one column, wrapped, however narrow
+    assert legend_columns(["a", "b", "c", "d"], 6.0) == (3, 26)  # 96 chars a line, 3 columns
+    # 43-character labels (+6 for the handle): two abreast in 144 characters, not three
+    assert legend_columns(["x" * 43, "y" * 43, "z" * 43], 9.0) == (2, 66)
+    assert legend_columns(["x" * 60], 2.0) == (1, 26)  # one column, wrapped, however narrow
 
 
 def test_invalid_cells_are_not_drawn(result, tmp_path):

@@ -259,8 +259,9 @@ def _legend(fig, da, layout: _Layout, hues, colors, marks: list) -> None:
                    ncols=columns, frameon=False)
 
 
-#: Characters of a "small" legend label per inch of figure width (about 9 pt type).
-_LEGEND_CHARS_PER_INCH = 11.0
+#: Characters of a "small" legend label per inch of figure width (about 8 pt type: a
+#: 58-character label of the standard figures measures 3.1 in, 18.7 a inch; 16 leaves room).
+_LEGEND_CHARS_PER_INCH = 16.0
 #: Room a legend entry needs besides its text (the handle and the gap between columns).
 _LEGEND_ENTRY_CHARS = 6
 
