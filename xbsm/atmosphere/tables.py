@@ -131,6 +131,24 @@ def from_tables(tables, *, visibility=None, altitude=None, ground_range=None,
     """
     given = {"visibility": visibility, "altitude": altitude, "ground_range": ground_range,
              "wavelength": wavelength}
+    values, coords, ihaze, merged_attrs = _read_input(tables, given, ihaze, attrs)
+    cube = _float32_cube(values, coords)
+    ds_coords = _cube_coordinates(coords, component_units, component_long_names, ihaze,
+                                  ihaze_meanings, coordinate_attrs)
+    var_attrs = dict(variable_attrs or {
+        "long_name": "path transmittance and radiance components (raw values in the file's "
+                     "units)"})
+    ds = xr.Dataset({"atmosphere": (DIMS, cube, var_attrs)}, coords=ds_coords,
+                    attrs=merged_attrs)
+    validate_database(ds)
+    return ds
+
+
+def _read_input(tables, given, ihaze, attrs):
+    """Values, numeric coordinates, IHAZE codes and global attributes of the input.
+
+    A DataArray's own coordinates and attributes fill what :func:`from_tables` was not given.
+    """
     merged_attrs = {}
     if isinstance(tables, xr.DataArray):
         if tables.dims != DIMS:
@@ -150,12 +168,16 @@ def from_tables(tables, *, visibility=None, altitude=None, ground_range=None,
     if missing:
         raise ValueError(f"from_tables needs the coordinate(s) {', '.join(missing)} (as "
                          "keyword arguments or coordinates of the DataArray)")
+    coords = {name: np.asarray(value, dtype=np.float64) for name, value in given.items()}
+    return values, coords, ihaze, merged_attrs
+
+
+def _float32_cube(values, coords):
+    """``values`` as float32, once their shape matches ``coords`` and every value fits."""
     if values.ndim != len(DIMS):
         raise ValueError(f"tables must have 5 dims {DIMS}; got shape {values.shape}")
-    n_comp = len(COMPONENTS)
-    coords = {name: np.asarray(value, dtype=np.float64) for name, value in given.items()}
     expected = (coords["visibility"].size, coords["altitude"].size,
-                coords["ground_range"].size, n_comp, coords["wavelength"].size)
+                coords["ground_range"].size, len(COMPONENTS), coords["wavelength"].size)
     if values.shape != expected:
         raise ValueError(f"tables has shape {values.shape}; the coordinates give {expected} "
                          f"({', '.join(DIMS)})")
@@ -167,7 +189,12 @@ def from_tables(tables, *, visibility=None, altitude=None, ground_range=None,
     if overflow.any():
         raise ValueError(f"tables value at {_cell(np.argwhere(overflow)[0], coords)} does not "
                          "fit in float32")
+    return cube
 
+
+def _cube_coordinates(coords, component_units, component_long_names, ihaze, ihaze_meanings,
+                      coordinate_attrs):
+    """The cube's coordinates with their attributes, as the file holds them."""
     ds_coords = {name: (name, coords[name], dict(_COORD_ATTRS[name]))
                  for name in ("visibility", "altitude", "ground_range", "wavelength")}
     ds_coords["component"] = ("component", np.array(COMPONENTS, dtype=object),
@@ -189,13 +216,7 @@ def from_tables(tables, *, visibility=None, altitude=None, ground_range=None,
             raise ValueError(f"coordinate_attrs names {name!r}, not a coordinate of the cube "
                              f"({', '.join(ds_coords)})")
         ds_coords[name][2].update(extra)
-    var_attrs = dict(variable_attrs or {
-        "long_name": "path transmittance and radiance components (raw values in the file's "
-                     "units)"})
-    ds = xr.Dataset({"atmosphere": (DIMS, cube, var_attrs)}, coords=ds_coords,
-                    attrs=merged_attrs)
-    validate_database(ds)
-    return ds
+    return ds_coords
 
 
 def _cell(index, coords):
