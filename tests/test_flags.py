@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import pytest
 import xarray as xr
-from scipy.integrate import trapezoid  # numpy.trapezoid needs numpy 2
+from dense_edge import dense_rer  # tests/dense_edge.py, shared
 
 import xbsm
 from xbsm import flags, study
@@ -114,7 +114,7 @@ def test_a_one_axis_smear_is_flagged_unresolved_on_its_own_slice():
     assert float(old.rer) > UNRESOLVED_RER > float(old.rer_x)  # the case the test is about
     assert (old.flags & flags.flag("blur_unresolved")).all()
     out = xbsm.niirs(sensor, scenario, method="accurate")
-    reference = _dense_rer(sensor, scenario, "accurate")
+    reference = dense_rer(sensor, scenario, "accurate")
     assert abs(float(out.rer_x) - reference[0]) < 1e-9
     assert abs(float(old.rer_x) / reference[0] - 1) > 5e-4  # the old rule: 1e-3 relative
     assert not (out.flags & flags.flag("blur_unresolved")).any()
@@ -123,18 +123,3 @@ def test_a_one_axis_smear_is_flagged_unresolved_on_its_own_slice():
     assert not (plain.flags & flags.flag("blur_unresolved")).any()
 
 
-def _dense_rer(sensor, scenario, method, samples=2**16):
-    """RER of the x and y slices by the trapezoid rule on 2^16 and 2^15 uniform steps over
-    [0, D / lambda_min] of the system OTF (xbsm.system_otf), Richardson-extrapolated: a
-    reference independent of xbsm.quadrature. RER = (2/pi) int H(f) sin(pi f ifov) / f df."""
-    cutoff = float(xbsm.niirs(sensor, scenario, method=method).cutoff_frequency)
-    f = np.linspace(0.0, cutoff, samples + 1)
-    otf = xbsm.system_otf(sensor, scenario, frequency=f, method=method)
-    h = otf.system_unfiltered.transpose("orientation", "frequency").values.real
-    ifov = np.array([float(sensor.pixel_pitch_x / sensor.focal_length),
-                     float(sensor.pixel_pitch_y / sensor.focal_length)])[:, None]
-    kernel = np.full((2, f.size), np.pi * ifov)  # sin(pi f ifov) / f -> pi ifov at f = 0
-    kernel[:, 1:] = np.sin(np.pi * f[1:] * ifov) / f[1:]
-    fine, coarse = (trapezoid(h[:, ::k] * kernel[:, ::k], f[::k], axis=-1) * 2 / np.pi
-                    for k in (1, 2))
-    return fine + (fine - coarse) / 3

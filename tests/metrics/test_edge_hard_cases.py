@@ -13,7 +13,7 @@ import warnings
 import numpy as np
 import pytest
 import xarray as xr
-from scipy.integrate import trapezoid  # numpy.trapezoid needs numpy 2
+from dense_edge import dense_rer  # tests/dense_edge.py, shared
 from scipy.special import erf
 
 import xbsm
@@ -24,24 +24,6 @@ from xbsm.metrics import edge
 
 IFOV = 2e-6  # Olson NIR: 8 um / 4 m [rad]
 SCENARIO = dict(altitude=9000.0, ground_range=20e3, visibility=23.0, platform_speed=100.0)
-
-
-def dense_rer(sensor, scenario, method, samples=2**16):
-    """RER of the x and y slices: trapezoid on 2^16 and 2^15 uniform steps over
-    [0, D / lambda_min] of the system OTF, Richardson-extrapolated.
-    RER = (2 / pi) int_0^fc H(f) sin(pi f ifov) / f df (IBSM Eq. 3-61, 3-63)."""
-    cutoff = float(xbsm.niirs(sensor, scenario, method=method).cutoff_frequency)
-    f = np.linspace(0.0, cutoff, samples + 1)
-    otf = xbsm.system_otf(sensor, scenario, frequency=f, method=method)
-    h = otf.system_unfiltered.transpose("orientation", "frequency").values.real
-    ifov = np.array([float(sensor.pixel_pitch_x / sensor.focal_length),
-                     float(sensor.pixel_pitch_y / sensor.focal_length)])[:, None]
-    kernel = np.empty((2, f.size))
-    kernel[:, 0] = np.pi * ifov[:, 0]  # the limit of sin(pi f ifov) / f at f = 0
-    kernel[:, 1:] = np.sin(np.pi * f[1:] * ifov) / f[1:]
-    fine, coarse = (trapezoid(h[:, ::k] * kernel[:, ::k], f[::k], axis=-1) * 2 / np.pi
-                    for k in (1, 2))
-    return fine + (fine - coarse) / 3
 
 
 def niirs_quiet(sensor, scenario, method):
