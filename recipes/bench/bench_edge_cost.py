@@ -3,8 +3,8 @@
 Issue 23 replaced the `accurate` and `fast` edge rule (composite Gauss-Legendre on uniform
 panels) by composite Gauss-Kronrod on panels that follow the system OTF (graded toward
 f = 0, one per drift-sinc lobe) with an error estimate. This times, for each checkout
-given (``--checkout PATH``, repeatable; default: this one and ``/work/wt-start``), the
-same cells with ``accurate`` and ``fast``:
+given (``--checkout PATH``, repeatable; default: this one alone), the same cells with
+``accurate`` and ``fast``:
 
 - ``olson``: the paper's Olson example over ground range -- both bands (one
   ``xbsm.niirs`` call each), 9 km, visibility 23 and 5 km, the 97 database ground ranges
@@ -24,9 +24,12 @@ is reported (wall time and the child's CPU time, which a busy shared machine dis
 less), every repeat kept. The load average is printed before every cell.
 
 Writes ``docs/benchmarks/bench_edge_cost.json`` (``--out``). Run from the repository
-root::
+root; the docs' before/after run compared this checkout with one of 3b99eb9 (the commit
+before issue 23's rule)::
 
-    .venv/bin/python recipes/bench/bench_edge_cost.py [--repeats 3]
+    git worktree add ../xbsm-before 3b99eb9
+    .venv/bin/python recipes/bench/bench_edge_cost.py --checkout . --checkout ../xbsm-before \
+        [--repeats 5]
 """
 
 from __future__ import annotations
@@ -113,7 +116,7 @@ def main():
     args = parser.parse_args()
     if args.child:
         return child()
-    checkouts = args.checkout or [str(ROOT), "/work/wt-start"]
+    checkouts = [str(Path(c).resolve()) for c in args.checkout or [ROOT]]
     children = {}
     for path in checkouts:
         env = {**os.environ, "PYTHONPATH": path, "OMP_NUM_THREADS": "1",
