@@ -894,10 +894,11 @@ def band_cutoff_arrays(aperture_diameter, wavelength, qe, transmission, waveleng
 
 #: For rules without an error estimate (pybsm's trapezoid, edge_rule="gauss_legendre"):
 #: below this RER the edge-response quadrature is not converged (tested on the worse of
-#: the x and y slices, where a one-axis smear shows first): over 240 random systems
-#: (recipes/evidence/preset_error.py) the uniform-panel Gauss-Legendre rule was within
-#: 6.2e-4 NIIRS where RER >= 0.05 (1e-5 where RER >= 0.15) and off by up to 3.6 below
-#: (flag ``blur_unresolved``). The Gauss-Kronrod rule flags by its own estimate instead.
+#: the x and y slices, where a one-axis smear shows first): against the independent
+#: reference on 434 systems (recipes/evidence/preset_error.py at 3b99eb9,
+#: docs/benchmarks/preset_error_before_issue23.json) the uniform-panel Gauss-Legendre rule
+#: was within 2.3e-4 NIIRS where RER >= 0.05 and off by up to 28 below (flag
+#: ``blur_unresolved``). The Gauss-Kronrod rule flags by its own estimate instead.
 UNRESOLVED_RER = 0.05
 
 
