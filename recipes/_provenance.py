@@ -41,8 +41,9 @@ def commit(root: Path | str = ROOT) -> dict:
     that times another checkout side by side records that checkout's commit.
     """
     def git(*args):
+        # rstrip only: a porcelain status line starts with a space (" M xbsm/...")
         proc = subprocess.run(["git", "-C", str(root), *args], capture_output=True, text=True)
-        return proc.stdout.strip() if proc.returncode == 0 else None
+        return proc.stdout.rstrip("\n") if proc.returncode == 0 else None
 
     changed = [line[3:] for line in (git("status", "--porcelain", "--", "xbsm") or "").splitlines()]
     return {"commit": git("rev-parse", "--short", "HEAD"),
