@@ -301,12 +301,13 @@ def test_readme_and_ci_build_the_docs_with_one_command():
     assert "docs_build\n" in (ROOT / ".ci" / "run").read_text()
 
 
-def test_gallery_has_the_five_examples():
+def test_gallery_has_the_six_examples():
     # docs/gallery: range performance, focal-length trade, noise and MTF breakdowns,
-    # a simulated image stack over range (issue 11)
+    # a simulated image stack over range (issue 11), the infrared cameras' NETD, MRTD
+    # and NIIRS (issue 25)
     assert [p.stem for p in GALLERY] == [
-        "plot_focal_length_trade", "plot_image_stack", "plot_mtf_breakdown",
-        "plot_noise_breakdown", "plot_range_performance"]
+        "plot_focal_length_trade", "plot_image_stack", "plot_infrared_cameras",
+        "plot_mtf_breakdown", "plot_noise_breakdown", "plot_range_performance"]
 
 
 @pytest.mark.slow

@@ -4,9 +4,10 @@ For the two cameras of docs/infrared.md (the MWIR camera of issue 25's first tri
 3-5 um, f/4, 15 um pitch, and an LWIR camera, 8-12 um, f/2, 17 um pitch), on a 2 m path
 (altitude 2 m, ground range 0, 23 km visibility) with a blackbody scene:
 
-1. NETD against scene temperature, 230-350 K, with the background-limited NETD
-   (sqrt(scene photoelectrons) / dN/dT: the scene's own shot noise only) and the well
-   fill;
+1. NETD against scene temperature, 230-350 K, with the shot-noise-limited NETD
+   sqrt(N) / (dN/dT), N all photoelectrons of the pixel (scene, 2 m path,
+   self-emission: ``target_photoelectrons``), i.e. without read, dark and quantization
+   noise, and the well fill;
 2. what each self-emission parameter does to the NETD at 300 K: the cold shield's
    temperature, the warm optics' emissivity (at 293 K), the cold filter's emissivity
    at 77 K and warmer, and its transmission; with the self-emission photoelectrons
@@ -85,7 +86,7 @@ def netd_against_temperature(camera):
     r = xbsm.netd(xbsm.sensor(**camera), xbsm.scenario(**LAB), temperature=TEMPERATURES)
     blip = np.sqrt(r.target_photoelectrons) / r.signal_derivative
     return {"temperature_K": rounded(TEMPERATURES), "netd_K": rounded(r.netd),
-            "background_limited_netd_K": rounded(blip), "well_fill": rounded(r.well_fill),
+            "shot_noise_limited_netd_K": rounded(blip), "well_fill": rounded(r.well_fill),
             "total_noise_e": rounded(r.total_noise),
             "signal_derivative_e_per_K": rounded(r.signal_derivative)}
 
