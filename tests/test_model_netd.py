@@ -6,6 +6,7 @@ xbsm), against finite differences of two SNR-chain runs, and for the expected tr
 """
 
 import math
+from pathlib import Path
 
 import dask.array as dsa
 import numpy as np
@@ -267,3 +268,49 @@ def test_background_limited_netd_matches_the_textbook_detectivity_form(band, f_n
     assert float(out["netd"]) == pytest.approx(textbook * exact_solid_angle, rel=1e-6)
     # and the small-angle difference is what it says, not noise: 0.8 % at f/4, 3 % at f/2
     assert float(out["netd"]) / textbook - 1 > 0.007
+
+
+LWIR = dict(aperture_diameter=0.1, focal_length=0.2, pixel_pitch_x=17e-6,
+            wavelength_min=8e-6, wavelength_max=12e-6, quantum_efficiency=0.6,
+            optics_transmission=0.8, integration_time=1e-4, read_noise=500.0,
+            max_well=2e7, bit_depth=14.0, dark_current=1e6, cold_shield_temperature=77.0,
+            cold_filter_temperature=77.0)
+
+
+@pytest.mark.parametrize("camera", [MWIR, LWIR], ids=["mwir", "lwir"])
+def test_netd_rises_with_warmer_sensor_parts_and_a_lossier_cold_filter(camera):
+    # docs/infrared.md's worked example: each self-emission knob adds background photons
+    # (no signal), so the NETD can only rise; the cold filter's transmission costs signal
+    lab = xbsm.scenario(**LAB)
+
+    def run(**change):
+        r = xbsm.netd(xbsm.sensor(**{**camera, **change}), lab)
+        return float(r.netd), float(r.self_emission_noise) ** 2
+
+    for knob, values in (("cold_shield_temperature", (77.0, 120.0, 150.0, 200.0)),
+                         ("optics_emissivity", (0.0, 0.02, 0.05, 0.1)),
+                         ("cold_filter_emissivity", (0.0, 0.05, 0.1, 0.2))):
+        extra = {"optics_temperature": 293.0} if knob == "optics_emissivity" else (
+            {"cold_filter_temperature": 200.0} if knob == "cold_filter_emissivity" else {})
+        runs = [run(**{knob: v}, **extra) for v in values]
+        netd, photoelectrons = (np.array(x) for x in zip(*runs, strict=True))
+        assert np.all(np.diff(photoelectrons) > 0), knob
+        assert np.all(np.diff(netd) >= 0), knob
+    # transmission 0.9: signal x 0.9, shot noise x sqrt(0.9); read and quantization noise
+    # do not fall, so the NETD rises by at least 1 / sqrt(0.9)
+    base, lossy = run()[0], run(cold_filter_transmission=0.9)[0]
+    assert lossy / base >= 1 / math.sqrt(0.9)
+
+
+def test_infrared_guide_worked_example_numbers_are_what_xbsm_gives():
+    # docs/infrared.md quotes these (recipes/evidence/infrared_guide.py)
+    lab = xbsm.scenario(**LAB)
+    page = (Path(__file__).resolve().parent.parent / "docs" / "infrared.md").read_text()
+    for camera, temperature, quoted in ((MWIR, 230.0, "232.0"), (MWIR, 350.0, "23.4"),
+                                        (LWIR, 230.0, "40.0"), (LWIR, 350.0, "26.8")):
+        r = xbsm.netd(xbsm.sensor(**camera), lab, temperature=temperature)
+        assert f"{float(r.netd) * 1e3:.1f}" == quoted
+        assert f"| {temperature:.0f} | " in page and f" {quoted} |" in page
+    hot = xbsm.netd(xbsm.sensor(**{**LWIR, "cold_shield_temperature": 200.0}), lab)
+    assert f"{float(hot.netd) * 1e3:.2f}" == "47.70"
+    assert "| cold shield 200 K | 47.02 | 2.4e5 | 47.70 |" in page

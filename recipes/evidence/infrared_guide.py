@@ -143,8 +143,8 @@ def main(argv=None):
                         "mrtd_x": mrtd_curve(camera),
                         "niirs_against_range": niirs_against_range(camera)}
         t = result[name]
-        print(f"\n{name}: NETD {np.round(np.array(t['netd_against_temperature']['netd_K']) * 1e3, 1)}"
-              f" mK at {TEMPERATURES} K")
+        netd = np.round(np.array(t["netd_against_temperature"]["netd_K"]) * 1e3, 1)
+        print(f"\n{name}: NETD {netd} mK at {TEMPERATURES} K")
         for variant, v in t["self_emission"].items():
             print(f"  {variant:34s} NETD {v['netd_K'] * 1e3:7.2f} mK  self-emission "
                   f"{v['self_emission_photoelectrons']:10.4g} e-  well {v['well_fill']:.3f}")
