@@ -39,7 +39,7 @@ lab = xbsm.scenario(altitude=2.0, ground_range=0.0, visibility=23.0)   # a 2 m p
 # scenes, where its few photoelectrons leave quantization and read noise a
 # larger share; the LWIR camera stays near its shot-noise limit.
 temperature = np.arange(230.0, 351.0, 5.0)
-fig, (left, middle, right) = plt.subplots(1, 3, figsize=(13, 4), layout="constrained")
+fig, left = plt.subplots(figsize=(6, 4), layout="constrained")
 for (name, camera), color in zip(CAMERAS.items(), ("C0", "C3"), strict=True):
     r = xbsm.netd(xbsm.sensor(**camera), lab, temperature=temperature)
     limit = np.sqrt(r.target_photoelectrons) / r.signal_derivative
@@ -58,6 +58,7 @@ left.legend()
 # Nyquist frequencies 1 / (2 IFOV); above them the bars alias and ``mrtd``
 # sets the flag ``bars_aliased`` (drawn thin).
 frequency = np.linspace(0.1, 11.0, 221)   # cycles/mrad
+fig, middle = plt.subplots(figsize=(6, 4), layout="constrained")
 for (name, camera), color in zip(CAMERAS.items(), ("C0", "C3"), strict=True):
     r = xbsm.mrtd(xbsm.sensor(**camera), lab, frequency=frequency * 1e3).sel(orientation="x")
     aliased = xbsm.flags.has_flag(r.flags, "bars_aliased").values
@@ -81,6 +82,7 @@ middle.legend()
 # not with rated imagery.
 ground_range = xr.DataArray(np.arange(0.0, 20001.0, 500.0), dims="ground_range")
 far = xbsm.scenario(altitude=1000.0, ground_range=ground_range, visibility=23.0)
+fig, right = plt.subplots(figsize=(6, 4), layout="constrained")
 for (name, camera), color in zip(CAMERAS.items(), ("C0", "C3"), strict=True):
     n = xbsm.niirs(xbsm.sensor(**camera), far).sel(giqe=5)
     right.plot(ground_range / 1e3, n.niirs, color=color, label=name)
