@@ -285,3 +285,66 @@ def test_read_tape7_reads_a_7sc_header_on_a_wavelength_grid(header, scale, facto
                                rtol=1e-15)
     np.testing.assert_array_equal(run.TRANS.values, raw[::-1, 1])
     np.testing.assert_allclose(run.PTH_THRML.values, raw[::-1, 2] * factor, rtol=1e-15)
+
+
+def test_modtran_inputs_sweeps_condition_points_and_keeps_the_target_on_the_ground():
+    points = [{}, {"ATMOSPHERE": {"MODEL": "ATM_TROPICAL"}},
+              {"SURFACE": {"GNDALT": 1.5}, "GEOMETRY": {"PARM2": 30.0}}]
+    grid = {"altitude": 9000.0, "ground_range": [0.0, 5000.0], "visibility": 10.0}
+    cases = [c["MODTRANINPUT"] for c in atm.modtran_inputs(grid, points)["MODTRAN"]]
+    assert [c["NAME"][:7] for c in cases] == ["xbsm_c0"] * 2 + ["xbsm_c1"] * 2 + ["xbsm_c2"] * 2
+    assert [c["ATMOSPHERE"]["MODEL"] for c in cases[::2]] == [
+        "ATM_MIDLAT_SUMMER", "ATM_TROPICAL", "ATM_MIDLAT_SUMMER"]
+    high = cases[4]["GEOMETRY"]
+    # ground 1.5 km MSL: the sensor 9 km above it, the target on it; the sun moved
+    assert (high["H1ALT"], high["H2ALT"], high["PARM2"]) == (10.5, 1.5, 30.0)
+    assert cases[0]["GEOMETRY"]["H2ALT"] == 0.0 and cases[0]["GEOMETRY"]["PARM2"] == 50.0
+    assert len({c["NAME"] for c in cases}) == 6
+    with pytest.raises(ValueError, match=r"section 'AEROSOLS' must map keys to values"):
+        atm.modtran_inputs(grid, {"AEROSOLS": "AER_DESERT"})
+
+
+def test_read_tape7_reads_every_run_of_a_file_and_tables_from_runs_grids_them(tmp_path):
+    # two runs in one file (MODTRAN appends runs, each closed by ' -9999.'): pyradi's
+    # tape7-03b with its card 3 edited to a sensor at 8 km above a ground target, nadir
+    # (BETA 0) and BETA 0.1 deg
+    lines = (DATA / "tape7-03b").read_text().splitlines()
+    runs_text = []
+    for beta in ("0.00000", "0.10000"):
+        edited = list(lines)
+        edited[5] = (f"   8.00000   0.00000 150.00000   9.23590   {beta}   0.00000    0"
+                     "        0.00000")
+        runs_text += edited
+    path = tmp_path / "two.tp7"
+    path.write_text("\n".join(runs_text) + "\n")
+    runs = atm.read_tape7(path)
+    assert [r.attrs["modtran_first_line"] for r in runs] == [1, len(lines) + 1]
+    table = atm.tables_from_runs(runs)
+    assert table.ground_range.values.tolist() == [0.0, math.radians(0.1) * EARTH_RADIUS]
+    with pytest.raises(ValueError, match=r"lacks the global attribute\(s\) surface_reflectance"):
+        atm.from_tables(table)  # SURREF 0 in the file: the reflectance must be given
+    table.attrs["surface_reflectance_of_database"] = 0.15
+    cube = atm.from_tables(table)  # a valid database: both tables present, within the horizon
+    np.testing.assert_array_equal(cube.atmosphere.values[0, 0, 1, 0],
+                                  runs[1].TRANS.values.astype(np.float32))
+    with pytest.raises(ValueError, match=r"two.tp7:1 and .*two.tp7:\d+ are both the table"):
+        atm.tables_from_runs(runs, ground_range=[0.0, 0.0])
+    with pytest.raises(ValueError, match=r"altitude must give one value per run \(2\)"):
+        atm.tables_from_runs(runs, altitude=[1.0])
+
+
+def test_the_docs_tape7_snr_example_runs_and_gives_the_number_it_quotes(tmp_path, monkeypatch):
+    # docs/atmosphere.md, "A public tape7 in xbsm.snr": the block runs as written and its
+    # quoted SNR (3.571) and contrast (270 photoelectrons) are what it computes
+    import re
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "atmosphere.md").read_text()
+    section = page[page.index("### A public tape7 in `xbsm.snr`"):]
+    block = re.findall(r"```python\n(.*?)```", section, flags=re.S)[0]
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    exec(compile(block, "docs/atmosphere.md tape7 block", "exec"), namespace)
+    r = namespace["r"]
+    assert "float(r.snr)   # 3.571" in block and "SNR **3.571**" in section
+    assert round(float(r.snr), 3) == 3.571
+    assert round(float(r.contrast_photoelectrons)) == 270 and "contrast 270" in section

@@ -74,8 +74,7 @@ _COLUMNS = {
 #: Other radiance columns kept (for checks: TOTAL_RAD is the sum of the four database
 #: radiances in a run without DISORT, RWRITE's SUMT).
 _EXTRA_RADIANCES = ("TOTAL_RAD", "SING_SCAT", "DRCT_RFLT", "THRML_SCT")
-#: First header name of the spectral column -> (unit, radiance factor to W sr-1 cm-2 um-1
-#: that is not a function of the grid). None: per cm-1, converted with nu^2 / 1e4.
+#: First header name of the spectral column -> its unit (WTHEAD's tape7 and .7sc headers).
 _SPECTRAL = {"FREQ": "cm-1", "FREQ(CM-1)": "cm-1", "FREQ (CM-1)": "cm-1",
              "WAVLEN(MCRN)": "um", "WAVLEN (UM)": "um", "WAVLEN(NM)": "nm", "WAVLEN (NM)": "nm"}
 #: The end of a run's spectral block (MODTRAN writes " -9999." after the last row).
@@ -157,9 +156,13 @@ def _header_columns(line):
     return names, ends
 
 
-def _row(line, names, ends, path, lineno):
-    """The numbers of one spectral row; NaN for a blank field (a DISORT run's THRML_SCT)."""
-    line = line[:ends[-1]] if len(names) == 2 else line
+def _row(line, names, ends, path, lineno, *, first_columns_only=False):
+    """The numbers of one spectral row; NaN for a blank field (a DISORT run's THRML_SCT).
+
+    ``first_columns_only``: read only the fields of ``names`` (the row goes on).
+    """
+    if first_columns_only:
+        line = line[:ends[-1]]
     tokens = line.split()
     if len(tokens) == len(names):
         try:
@@ -240,9 +243,10 @@ def _parse_run(lines, start, path):
     if conditions["IEMSCT"] == 3:
         _fail(path, start + 1, "IEMSCT 3 (transmitted solar irradiance) holds no path "
                                "radiances or path transmittance; run IEMSCT 2 (or 0)")
-    if conditions["IEMSCT"] == 0:
-        # transmittance only: keep FREQ and COMBIN (the total); the species columns after
-        # them can run together in the header (pyradi's tape7-01b: 'H2-CH4CH4-CH4')
+    transmittance_only = conditions["IEMSCT"] == 0
+    if transmittance_only:
+        # keep FREQ and COMBIN (the total); the species columns after them can run
+        # together in the header (pyradi's tape7-01b: 'H2-CH4CH4-CH4')
         names, ends = names[:2], ends[:2]
     rows, i = [], header + 1
     while i < len(lines):
@@ -257,7 +261,8 @@ def _parse_run(lines, start, path):
         if not rows and not _NUMBER.match(stripped):  # the second header line (units)
             i += 1
             continue
-        rows.append(_row(text, names, ends, path, i + 1))
+        rows.append(_row(text, names, ends, path, i + 1,
+                         first_columns_only=transmittance_only))
         i += 1
     else:
         _fail(path, len(lines), f"the run starting at line {start + 1} ends without its "
@@ -559,15 +564,19 @@ APPENDIX_A = {
 _BACKGROUND = "background AATEMP 297 K, SURREFb 'Mixed Forest' (Appendix A; not written)"
 
 
-def _case(index, visibility, altitude, ground_range, conditions):
+def _case(index, point, visibility, altitude, ground_range, conditions):
     """One MODTRANINPUT for a grid point, Appendix A updated by ``conditions``."""
     case = copy.deepcopy(APPENDIX_A)
     for section, values in conditions.items():
-        case.setdefault(section, {}).update(values)
+        if not isinstance(values, dict):
+            raise ValueError(f"conditions: section {section!r} must map keys to values; got "
+                             f"{values!r}")
+        case.setdefault(section, {}).update(copy.deepcopy(values))
     geometry = case["GEOMETRY"]
     ground_km = float(case["SURFACE"]["GNDALT"])
-    geometry["H1ALT"] = ground_km + altitude / 1e3
-    geometry["H2ALT"] = ground_km + float(geometry.get("H2ALT", 0.0))
+    geometry["H1ALT"] = ground_km + altitude / 1e3  # km MSL: the sensor above the ground
+    if "H2ALT" not in conditions.get("GEOMETRY", {}):
+        geometry["H2ALT"] = ground_km  # the target on the ground (Appendix A: H2 = GNDALT = 0)
     if ground_range == 0.0:
         geometry["OBSZEN"] = 180.0  # straight down: H1ALT, H2ALT and OBSZEN ([wagl], case 2A)
     else:
@@ -577,11 +586,15 @@ def _case(index, visibility, altitude, ground_range, conditions):
         geometry["RAD_E"] = EARTH_RADIUS / 1e3
     case["AEROSOLS"]["VIS"] = float(visibility)
     name = f"xbsm_v{visibility:g}_a{altitude:g}_g{ground_range:g}".replace(".", "p")
+    if point is not None:
+        name = f"xbsm_c{point}" + name[4:]
     case["FILEOPTIONS"] = {"NOPRNT": 2, "CSVPRNT": f"{name}.csv", "JSONPRNT": f"{name}.json",
                            **case.get("FILEOPTIONS", {})}
+    where = "" if point is None else f"condition point {point}, "
     head = {"NAME": name, "DESCRIPTION": (
-        f"xbsm atmosphere table: visibility {visibility:g} km, sensor altitude {altitude:g} m "
-        f"above ground, ground range {ground_range:g} m; {_BACKGROUND}"), "CASE": index}
+        f"xbsm atmosphere table: {where}visibility {visibility:g} km, sensor altitude "
+        f"{altitude:g} m above ground, ground range {ground_range:g} m; {_BACKGROUND}"),
+        "CASE": index}
     return {"MODTRANINPUT": {**head, **case}}
 
 
@@ -607,18 +620,21 @@ def modtran_inputs(grid, conditions=None, *, directory=None, multi_case=True) ->
     summer, rural aerosol, sun 50 deg from zenith and 90 deg in azimuth from the line of
     sight, day 236, target at 299 K with 15 % reflectance on the ground at sea level,
     0.3-14 um by 0.01 um, slit 0.02 um) unless ``conditions`` says otherwise. Each case
-    writes a CSV and a JSON spectral output and, with MODTRAN's default file options, the
-    tape7 and ``.7sc`` that :func:`read_tape7` reads back.
+    asks for a CSV and a JSON spectral output (``FILEOPTIONS``); the legacy tape7 and
+    ``.7sc`` files, which :func:`read_tape7` reads back, are MODTRAN's to write unless
+    ``FILEOPTIONS`` turns them off.
 
     Parameters
     ----------
     grid : dict or xr.Dataset
         ``altitude`` [m] (sensor above ground), ``ground_range`` [m] and ``visibility``
         [km] (default 23 and 5), each a scalar or a sequence.
-    conditions : dict, optional
+    conditions : dict or sequence of dict, optional
         Section -> {key: value} updating :data:`APPENDIX_A`, e.g.
         ``{"ATMOSPHERE": {"MODEL": "ATM_TROPICAL"}, "GEOMETRY": {"PARM2": 30.0}}``; every key
-        must be in :data:`MODTRAN6_KEYS`.
+        must be in :data:`MODTRAN6_KEYS`. A sequence of such dicts is a list of condition
+        points: the cases are then every condition point x visibility x altitude x ground
+        range, named ``xbsm_c<point>_...``.
     directory : str or os.PathLike, optional
         Write the cases there: one ``xbsm_cases.json`` holding them all (``multi_case``,
         MODTRAN 6's ``{"MODTRAN": [case, ...]}``), or one file per case named by its NAME.
@@ -628,8 +644,8 @@ def modtran_inputs(grid, conditions=None, *, directory=None, multi_case=True) ->
     Returns
     -------
     dict
-        ``{"MODTRAN": [{"MODTRANINPUT": {...}}, ...]}``, the cases in (visibility, altitude,
-        ground range) order.
+        ``{"MODTRAN": [{"MODTRANINPUT": {...}}, ...]}``, the cases in (condition point,
+        visibility, altitude, ground range) order, ``CASE`` numbering them from 0.
 
     Raises
     ------
@@ -647,21 +663,27 @@ def modtran_inputs(grid, conditions=None, *, directory=None, multi_case=True) ->
 
     altitudes, ranges = values("altitude"), values("ground_range")
     visibilities = values("visibility", [23.0, 5.0])
-    for name, vals, low in (("altitude", altitudes, 0.0), ("ground_range", ranges, -1e-300),
-                            ("visibility", visibilities, 0.0)):
-        bad = [v for v in vals if not (math.isfinite(v) and v > low)]
+    for name, vals, closed in (("altitude", altitudes, False), ("ground_range", ranges, True),
+                               ("visibility", visibilities, False)):
+        bad = [v for v in vals if not (math.isfinite(v) and (v >= 0.0 if closed else v > 0.0))]
         if bad:
-            raise ValueError(f"grid {name} must be finite and {'>= 0' if low < 0 else '> 0'}; "
+            raise ValueError(f"grid {name} must be finite and {'>=' if closed else '>'} 0; "
                              f"got {bad[0]!r}")
-    conditions = dict(conditions or {})
+    if conditions is None or isinstance(conditions, dict):
+        points = [(None, dict(conditions or {}))]
+    else:
+        points = list(enumerate(dict(c) for c in conditions))
+        if not points:
+            raise ValueError("conditions must be a dict or a non-empty sequence of dicts")
     cases = []
-    for vis in visibilities:
-        for alt in altitudes:
-            reach = float(horizon(alt))
-            for gr in ranges:
-                if gr > reach:
-                    continue
-                cases.append(_case(len(cases), vis, alt, gr, conditions))
+    for point, condition in points:
+        for vis in visibilities:
+            for alt in altitudes:
+                reach = float(horizon(alt))
+                for gr in ranges:
+                    if gr > reach:
+                        continue
+                    cases.append(_case(len(cases), point, vis, alt, gr, condition))
     document = {"MODTRAN": cases}
     _check_keys(document)
     if directory is not None:
