@@ -348,3 +348,13 @@ def test_the_docs_tape7_snr_example_runs_and_gives_the_number_it_quotes(tmp_path
     assert "float(r.snr)   # 3.571" in block and "SNR **3.571**" in section
     assert round(float(r.snr), 3) == 3.571
     assert round(float(r.contrast_photoelectrons)) == 270 and "contrast 270" in section
+
+
+def test_read_tape7_names_the_row_where_the_spectral_column_turns_back(tmp_path):
+    lines = (DATA / "tape7-03b").read_text().splitlines()
+    lines[20] = lines[20].replace(lines[20][:8], " 2000.00", 1)  # line 21: 2000 after 2058
+    bad = tmp_path / "turn.tp7"
+    bad.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ValueError, match=r"turn.tp7:21: the spectral column FREQ is not strictly "
+                                         r"monotone \(2058.0 then 2000.0\)"):
+        atm.read_tape7(bad)

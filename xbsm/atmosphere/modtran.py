@@ -248,7 +248,7 @@ def _parse_run(lines, start, path):
         # keep FREQ and COMBIN (the total); the species columns after them can run
         # together in the header (pyradi's tape7-01b: 'H2-CH4CH4-CH4')
         names, ends = names[:2], ends[:2]
-    rows, i = [], header + 1
+    rows, row_lines, i = [], [], header + 1
     while i < len(lines):
         text = lines[i]
         stripped = text.strip()
@@ -258,11 +258,12 @@ def _parse_run(lines, start, path):
         if not stripped:
             i += 1
             continue
-        if not rows and not _NUMBER.match(stripped):  # the second header line (units)
+        if i == header + 1 and stripped.startswith("CM-1"):  # IEMSCT 0's units line (WTHEAD)
             i += 1
             continue
         rows.append(_row(text, names, ends, path, i + 1,
                          first_columns_only=transmittance_only))
+        row_lines.append(i + 1)
         i += 1
     else:
         _fail(path, len(lines), f"the run starting at line {start + 1} ends without its "
@@ -271,9 +272,11 @@ def _parse_run(lines, start, path):
         _fail(path, header + 1, f"a run needs at least two spectral rows; found {len(rows)}")
     table = np.array(rows, dtype=np.float64)
     grid = table[:, 0]
-    if not (np.all(np.diff(grid) > 0) or np.all(np.diff(grid) < 0)):
-        k = int(np.flatnonzero(np.diff(grid) == 0)[0]) if np.any(np.diff(grid) == 0) else 0
-        _fail(path, header + 2 + k, f"the spectral column {names[0]} is not strictly monotone")
+    step = np.sign(np.diff(grid))
+    if step[0] == 0 or np.any(step != step[0]):
+        k = int(np.flatnonzero(step != step[0])[0]) + 1 if step[0] != 0 else 1
+        _fail(path, row_lines[k], f"the spectral column {names[0]} is not strictly monotone "
+                                  f"({float(grid[k - 1])!r} then {float(grid[k])!r})")
     picked, sources = {}, {}
     for component, candidates in _COLUMNS.items():
         for name in candidates:
@@ -314,7 +317,8 @@ def read_tape7(path) -> list[xr.Dataset]:
     ----------
     path : str or os.PathLike
         A tape7 / ``.tp7`` (spectral column FREQ, cm-1) or ``.7sc`` (``FREQ(CM-1)``,
-        ``WAVLEN(MCRN)`` or ``WAVLEN(NM)``) written by MODTRAN 4, 5 or 6, one or more runs.
+        ``WAVLEN(MCRN)`` or ``WAVLEN(NM)``) in the layout of MODTRAN 5 and 6, one or more
+        runs.
 
     Returns
     -------
