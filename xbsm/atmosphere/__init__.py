@@ -13,7 +13,9 @@ extinction profile, and :mod:`~xbsm.atmosphere.lookup` (:func:`atmosphere_at`,
 :func:`band_atmosphere`, :func:`interpolate_database`); :mod:`~xbsm.atmosphere.tables`
 builds, validates and writes a database file from anyone's tables
 (:func:`from_tables`, :func:`write_database`), and :func:`use_database` makes such a
-file the default inside a ``with`` block. Every public name of those
+file the default inside a ``with`` block; :mod:`~xbsm.atmosphere.modtran` reads MODTRAN's
+tape7 / ``.7sc`` outputs into such tables and writes the MODTRAN 6 JSON cases of a grid
+(:func:`read_tape7`, :func:`tables_from_runs`, :func:`modtran_inputs`). Every public name of those
 modules is importable from ``xbsm.atmosphere``, on first use (PEP 562), so that
 :mod:`xbsm.params` and :mod:`xbsm.flags` can read the database's facts without importing
 the interpolation.
@@ -79,6 +81,7 @@ _PUBLIC = {
     "rules": "rules",
     "lookup": "lookup",
     "tables": "tables",
+    "modtran": "modtran",
     **{name: "database" for name in (
         "ALTITUDES", "ALTITUDE_GAP", "ALTITUDE_RANGE", "COMPONENTS", "GROUND_RANGES",
         "GROUND_RANGE_RANGE", "IHAZE", "LONG_NAMES", "SURFACE_REFLECTANCE", "UNITS",
@@ -90,6 +93,8 @@ _PUBLIC = {
     **{name: "lookup" for name in (
         "RELATIVE_EDGE_TOLERANCE", "WAVELENGTH_ATTRS", "atmosphere_at", "band_atmosphere",
         "band_atmosphere_arrays", "band_wavelengths", "interpolate_database")},
+    **{name: "modtran" for name in (
+        "APPENDIX_A", "MODTRAN6_KEYS", "modtran_inputs", "read_tape7", "tables_from_runs")},
     **{name: "tables" for name in (
         "DIMS", "FILE_UNITS", "REQUIRED_ATTRS", "from_tables", "horizon", "validate_database",
         "write_database")},
