@@ -85,11 +85,13 @@ _PUBLIC = {
         "VARIABLES", "VISIBILITIES",
         "WAVELENGTH_MAX", "WAVELENGTH_MIN", "Database", "database_path",
         "database_wavelengths", "load_database", "open_atmosphere", "use_database",
-        "check_supported", "database_visibilities")},
+        "check_supported", "database_visibilities", "CONDITIONS", "CONDITION_RTOL",
+        "database_conditions", "describe_conditions", "listed", "visibility_range")},
     **{name: "rules" for name in ("INTERPOLATIONS", "RULES", "SCALE_HEIGHT", "Rule")},
     **{name: "lookup" for name in (
         "RELATIVE_EDGE_TOLERANCE", "WAVELENGTH_ATTRS", "atmosphere_at", "band_atmosphere",
-        "band_atmosphere_arrays", "band_wavelengths", "interpolate_database")},
+        "band_atmosphere_arrays", "band_wavelengths", "interpolate_database",
+        "across_visibility", "condition_inputs")},
     **{name: "tables" for name in (
         "DIMS", "FILE_UNITS", "REQUIRED_ATTRS", "from_tables", "horizon", "validate_database",
         "write_database")},
