@@ -972,7 +972,7 @@ def _check_held(values: dict) -> None:
         if np.any(outside):
             raise ValueError(
                 f"visibility must be within {visibility_range(held['visibility'])}; got "
-                f"{vis.values[outside].ravel()[0]!r}")
+                f"{float(vis.values[outside].ravel()[0])!r}")
     for name in CONDITION_SPECS:
         if name not in values:
             continue
@@ -988,7 +988,7 @@ def _check_held(values: dict) -> None:
             if not np.all(known):
                 raise ValueError(
                     f"{name} must be one of {listed(name, held[name])}, the values of the "
-                    f"atmosphere database in use; got {value.values[~known].ravel()[0]!r}")
+                    f"atmosphere database in use; got {float(value.values[~known].ravel()[0])!r}")
 
 
 def cn2_table(cn2_profile):

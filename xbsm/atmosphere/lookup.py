@@ -102,6 +102,13 @@ def _validate(altitude, ground_range, visibility, rule, db, conditions=()):
     if bad.any():
         raise ValueError(f"visibility must be within {visibility_range(db.visibility)}; got "
                          f"{float(visibility[bad].flat[0])!r}")
+    if rule.nodes_only:
+        off = ~np.isin(visibility, db.visibility)
+        if off.any():
+            raise ValueError(
+                f"visibility={float(visibility[off].flat[0])!r} km is not a database node "
+                f"(interpolation={rule.name!r}); the database holds "
+                + ", ".join(f"{v:g}" for v in db.visibility) + " km")
     for (name, held), values in zip(db.conditions, conditions, strict=True):
         bad = ~_held(values, held)
         if bad.any():
