@@ -289,3 +289,25 @@ def test_a_condition_dim_is_swept_in_a_study_file(two_models, tmp_path):
         # the maritime tables (k + 1) attenuate more: lower SNR at every visibility
         assert (snr.sel(aerosol_model=4) < snr.sel(aerosol_model=1)).all()
         assert (snr.diff("visibility") < 0).all()
+
+
+def test_xbsm_run_takes_the_database_of_a_condition_study(two_models, tmp_path, capsys):
+    import hashlib
+
+    import xbsm.cli
+
+    toml = tmp_path / "conditions.toml"
+    toml.write_text(CONDITION_STUDY)
+    out = tmp_path / "conditions.nc"
+    # without the file that holds the aerosol models: refused, listing what is held
+    with pytest.raises(SystemExit) as stop:
+        xbsm.cli.main(["run", str(toml), "-o", str(out), "--no-figures"])
+    assert stop.value.code == 2
+    assert "holds no aerosol_model dimension (it holds visibility within [5, 23] km" in \
+        capsys.readouterr().err
+    assert xbsm.cli.main(["run", str(toml), "-o", str(out), "--no-figures",
+                          "--atmosphere", str(two_models)]) == 0
+    with xr.open_dataset(out) as written:
+        assert written.sizes["aerosol_model"] == 2 and written.sizes["visibility"] == 4
+        assert written.attrs["xbsm_atmosphere_sha256"] == hashlib.sha256(
+            two_models.read_bytes()).hexdigest()
