@@ -62,6 +62,14 @@ Interpolation between database nodes (``interpolation=``):
 
 The leave-one-out errors behind these choices are in ``docs/atmosphere.md``.
 
+Between two of the database's visibilities, each rule runs at both bracketing
+visibility tables and the two are combined in extinction
+(:func:`~xbsm.atmosphere.lookup.across_visibility`: ln TRANS, SURF_EMIS, GRND_RFLT linear
+in 1/visibility, the path radiances linear in the transmission lost), flagged
+``visibility_interpolated``. A database may hold other conditions as dims
+(:data:`~xbsm.atmosphere.database.CONDITIONS`); a scenario selects one of their values
+(``conditions=``), never between them.
+
 At a database node every option returns the stored value exactly. Where a
 bracketing table is missing (beyond the horizon of the lower altitude, or above
 ground range 0 between 24.5 km and 550 km) the spectra are NaN and the

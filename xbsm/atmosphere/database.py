@@ -3,7 +3,8 @@
 The database (pyBSM 0.16.1's 3430 MODTRAN 5.2.1 runs, see ``NOTICE``) is one NetCDF
 file, ``atmosphere.nc``, with a float32 variable ``atmosphere`` on the dims
 (visibility, altitude, ground_range, component, wavelength) in the database's native
-units. This module is the one place that knows the file: where it is
+units; another database may put condition dims (:data:`CONDITIONS`) before them.
+This module is the one place that knows the file: where it is
 (:func:`database_path`), its facts (the nodes of each coordinate, the limits that
 follow from them, the components and their units), how to open it lazily in SI
 units (:func:`open_atmosphere`) and how to read it into memory once per process

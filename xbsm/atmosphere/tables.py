@@ -2,8 +2,10 @@
 
 The database file is a contract (``docs/atmosphere.md``, "The database file"): one
 float32 variable ``atmosphere`` on (visibility, altitude, ground_range, component,
-wavelength) in the file's units (TRANS ``1``, radiances ``W sr-1 cm-2 um-1``), NaN where
-a table has no entry. :func:`from_tables` turns arrays (or a DataArray) into that cube as
+wavelength), optionally after condition dims
+(:data:`~xbsm.atmosphere.database.CONDITIONS`), in the file's units (TRANS ``1``,
+radiances ``W sr-1 cm-2 um-1``), NaN where a table has no entry.
+:func:`from_tables` turns arrays (or a DataArray) into that cube as
 an :class:`xarray.Dataset` and validates it; :func:`validate_database` checks a cube (one
 :func:`from_tables` made, or the file opened with :func:`xarray.open_dataset`) and names
 the coordinate or the cell that breaks the contract; :func:`write_database` writes it as
