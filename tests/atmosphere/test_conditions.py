@@ -326,3 +326,18 @@ def test_the_shipped_tables_follow_koschmieder_where_the_rule_assumes_it(ground_
     trans = db.cube[:, 0, g, 0, w].astype(float)
     extinction = -np.log(trans) / (ground_range / 1e3)  # [1/km]
     np.testing.assert_allclose(extinction, 3.912 / db.visibility, rtol=2e-3)
+
+
+def test_an_interpolated_visibility_sweep_is_lazy_and_equals_eager():
+    import dask
+
+    visibility = xr.DataArray([23.0, 14.0, 9.0, 5.0], dims="visibility")
+    def refuse(*args, **kwargs):
+        raise AssertionError("something was computed")
+
+    with dask.config.set(scheduler=refuse):  # building the result computes nothing
+        lazy = atm.atmosphere_at(9000.0, 20e3, visibility.chunk(1),
+                                 wavelength_bounds=(0.5e-6, 0.6e-6))
+    assert lazy["transmission"].chunks is not None
+    eager = atm.atmosphere_at(9000.0, 20e3, visibility, wavelength_bounds=(0.5e-6, 0.6e-6))
+    xr.testing.assert_identical(lazy.compute(), eager)
