@@ -88,8 +88,8 @@ ERROR_ROWS = [
      ValueError, "wavelength_min must be smaller than wavelength_max"),
     ("band_swept", lambda: xbsm.sensor(**{**SENSOR, "wavelength_min": xr.DataArray(
         [0.5e-6, 0.55e-6], dims="b")}), ValueError, "band edges cannot be swept"),
-    ("visibility_not_in_database", lambda: xbsm.scenario(**{**SCENARIO, "visibility": 10.0}),
-     ValueError, "visibility must be one of"),
+    ("visibility_not_in_database", lambda: xbsm.scenario(**{**SCENARIO, "visibility": 2.0}),
+     ValueError, "visibility must be within [5, 23] km"),
     ("misspelt_sensor_keyword", lambda: xbsm.sensor(**SENSOR, focal_lenght=1.0),
      ValueError, "did you mean 'focal_length'"),
     ("misspelt_scenario_keyword", lambda: xbsm.scenario(**SCENARIO, visibilty=5.0),

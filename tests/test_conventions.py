@@ -155,6 +155,12 @@ NOT_LABELLED = MappingProxyType({
     "xbsm.atmosphere.database.use_database": "a context manager; yields a path",
     "xbsm.atmosphere.database.check_supported": "a validator: returns None or raises",
     "xbsm.atmosphere.database.database_visibilities": "returns a tuple of floats",
+    "xbsm.atmosphere.database.database_conditions": "returns a dict of tuples of floats",
+    **{f"xbsm.atmosphere.database.{name}": "returns the text of an error message"
+       for name in ("describe_conditions", "listed", "visibility_range")},
+    "xbsm.atmosphere.lookup.across_visibility": "a kernel: plain numpy arrays in and out "
+    "(atmosphere_at labels the result)",
+    "xbsm.atmosphere.lookup.condition_inputs": "returns the inputs, in the database's order",
     "xbsm.atmosphere.tables.from_tables": "the raw database cube in the file's schema; units "
     "differ by component and are in its component_units coordinate (docs/atmosphere.md)",
     "xbsm.atmosphere.tables.validate_database": "a validator: returns None or raises",

@@ -68,7 +68,8 @@ def test_kernel_must_sum_to_one_within_rounding():
         ({"altitude": 1.0}, "altitude"),
         ({"ground_range": -1.0}, "ground_range"),
         ({"ground_range": 301e3}, "ground_range"),
-        ({"visibility": 10.0}, "visibility"),
+        ({"visibility": 2.0}, "visibility"),
+        ({"visibility": 50.0}, "visibility"),
     ],
 )
 def test_scenario_rejects_bad_input(kw, name):

@@ -332,6 +332,11 @@ def applier(sensor: xr.Dataset, scenario: xr.Dataset):
     return Labelled(sensor, scenario) if p is None else Direct(sensor, scenario, p)
 
 
+def _conditions_of(scenario) -> dict:
+    """The atmosphere conditions a scenario (Dataset or dict of arrays) gives, by name."""
+    return {name: scenario[name] for name in params.CONDITION_SPECS if name in scenario}
+
+
 # ---- the appliers ------------------------------------------------------------------
 
 class Labelled:
@@ -350,7 +355,8 @@ class Labelled:
         s, sc = self.sensor, self.scenario
         return band_atmosphere(sc["altitude"], sc["ground_range"], sc["visibility"],
                                s["wavelength_min"], s["wavelength_max"],
-                               interpolation=m.atmosphere_interpolation, band_edges=m.band_edges)
+                               interpolation=m.atmosphere_interpolation, band_edges=m.band_edges,
+                               conditions=_conditions_of(sc))
 
     def radiances(self, atm, targets, m, scenario=None):
         sc = self.scenario if scenario is None else scenario
@@ -458,7 +464,7 @@ class Direct:
         atm = band_atmosphere_arrays(p["altitude"], p["ground_range"], p["visibility"],
                                      p["wavelength_min"], p["wavelength_max"],
                                      interpolation=m.atmosphere_interpolation,
-                                     band_edges=m.band_edges)
+                                     band_edges=m.band_edges, conditions=_conditions_of(p))
         return self._labelled.atmosphere(m) if atm is None else atm  # the door raises
 
     def radiances(self, atm, targets, m, scenario=None):

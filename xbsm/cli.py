@@ -38,23 +38,34 @@ def _figure_dir(out: Path) -> Path:
 
 
 def run(study_file: Path | None, out: Path | None, *, overwrite=False, scheduler=None,
-        workers=None, figures=True, progress=True) -> Path:
+        workers=None, figures=True, progress=True, atmosphere: Path | None = None) -> Path:
     """Load, compute, write and draw one study; return the NetCDF path.
 
     A result that is written is a success: figures that cannot be drawn are a
-    warning line saying how to draw them (:func:`_draw_or_warn`).
+    warning line saying how to draw them (:func:`_draw_or_warn`). ``atmosphere``: a
+    database file used for the whole study (:func:`xbsm.atmosphere.use_database`).
     """
+    from contextlib import nullcontext
+
     from . import study
+    from .atmosphere import check_supported, use_database
     from .study.store import OutputLock, check_output
 
-    spec = study.load(study_file or default_study_path())
-    out = out or Path(spec.output or (Path(study_file or DEFAULT_STUDY).stem + ".nc"))
-    check_output(out, overwrite, study_file)  # before any work
-    with OutputLock(out, spec.title):  # a second run on this output is refused at once
-        result = study.run(spec)
-        stop_if_interrupted()
-        study.write(result, out, overwrite=overwrite, scheduler=scheduler or spec.scheduler,
-                    workers=workers or spec.workers, progress=progress)
+    if atmosphere is not None:
+        try:
+            check_supported(atmosphere)
+        except ValueError as err:
+            raise study.StudyError(f"--atmosphere {atmosphere}: {err}") from None
+    with nullcontext() if atmosphere is None else use_database(atmosphere):
+        spec = study.load(study_file or default_study_path())
+        out = out or Path(spec.output or (Path(study_file or DEFAULT_STUDY).stem + ".nc"))
+        check_output(out, overwrite, study_file)  # before any work
+        with OutputLock(out, spec.title):  # a second run on this output is refused at once
+            result = study.run(spec)
+            stop_if_interrupted()
+            study.write(result, out, overwrite=overwrite,
+                        scheduler=scheduler or spec.scheduler,
+                        workers=workers or spec.workers, progress=progress)
     print(f"wrote {out}")
     if figures:
         _draw_or_warn(out, _figure_dir(out))
@@ -160,6 +171,9 @@ def _parser() -> argparse.ArgumentParser:
                       "such as tcp://host:8786 (default: the study's, else threads)")
     run_.add_argument("--workers", type=int, help="threads or cluster workers")
     run_.add_argument("--no-figures", action="store_true", help="write only the NetCDF file")
+    run_.add_argument("--atmosphere", type=Path, metavar="FILE",
+                      help="atmosphere database file for the whole study (default: the "
+                           "shipped one); see docs/atmosphere.md")
     plot_ = sub.add_parser("plot", help="the standard figures of a result file")
     plot_.add_argument("result", type=Path, help="a NetCDF file written by xbsm run")
     plot_.add_argument("--out", type=Path, help="directory (default: next to the file)")
@@ -177,7 +191,7 @@ def _command(parser, args) -> None:
         if args.workers is not None and args.workers < 1:
             parser.error(f"--workers must be >= 1; got {args.workers}")
         run(args.study, args.out, overwrite=args.overwrite, scheduler=args.scheduler,
-            workers=args.workers, figures=not args.no_figures)
+            workers=args.workers, figures=not args.no_figures, atmosphere=args.atmosphere)
     elif args.command == "olson":
         if args.out.exists() and not args.out.is_dir():
             parser.error(f"--out {args.out} exists and is not a directory")

@@ -163,6 +163,12 @@ FLAGS = MappingProxyType({
         "(no reflected light in the band, or its own emission dominates): the "
         "noise-equivalent contrast and the MRC are infinite or NaN",
     ),
+    "visibility_interpolated": (
+        134217728,
+        "visibility between two of the atmosphere database's visibilities: the spectra were "
+        "interpolated in extinction (optical depth linear in 1/visibility, path radiances "
+        "linear in the transmission lost) between the two bracketing visibility tables",
+    ),
 })
 
 INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive", "rer_nonpositive",
@@ -183,7 +189,7 @@ CALIBRATION = (
 """Bits saying a number is outside a GIQE's calibration (or off the NIIRS scale)."""
 
 NOTICE = ("atmosphere_sparse", "well_fill_limited", "partial_spectral_coverage",
-          "image_flat", "atmosphere_fallback")
+          "image_flat", "atmosphere_fallback", "visibility_interpolated")
 """Bits that are neither: information about how a number was obtained."""
 
 INVALID_MASK = sum(FLAGS[name][0] for name in INVALID)

@@ -32,11 +32,15 @@ from . import units
 from ._metadata import declared
 from .atmosphere.database import (  # the database's facts, re-exported where they bound inputs
     ALTITUDE_RANGE,
+    CONDITION_RTOL,
+    CONDITIONS,
     GROUND_RANGE_RANGE,
-    VISIBILITIES,
     WAVELENGTH_MAX,
     WAVELENGTH_MIN,
-    database_visibilities,
+    database_conditions,
+    describe_conditions,
+    listed,
+    visibility_range,
 )
 
 
@@ -393,8 +397,8 @@ SPECTRAL = ("optics_transmission", "quantum_efficiency", "stray_irradiance")
 SCENARIO_SPECS: dict[str, Spec] = {
     "altitude": Spec("m", "sensor altitude above ground", *ALTITUDE_RANGE),
     "ground_range": Spec("m", "ground range from sensor nadir to target", *GROUND_RANGE_RANGE),
-    "visibility": Spec("km", "meteorological visibility (MODTRAN rural aerosol)",
-                       min(VISIBILITIES), max(VISIBILITIES)),
+    # within the range of the database in use (checked by scenario: xbsm.atmosphere)
+    "visibility": Spec("km", "meteorological visibility (MODTRAN rural aerosol)", **POSITIVE),
     "platform_speed": Spec("m s-1", "platform ground speed", **NONNEGATIVE),
     "target_reflectance": Spec("1", "target reflectance", **FRACTION),
     "target_temperature": Spec("K", "target temperature", **POSITIVE),
@@ -415,6 +419,27 @@ SCENARIO_SPECS: dict[str, Spec] = {
     ),
     "cn2_multiplier": Spec("1", "multiplier of the whole Cn2 profile", **NONNEGATIVE),
 }
+
+#: The atmosphere conditions a database may hold as dimensions besides visibility
+#: (:data:`xbsm.atmosphere.CONDITIONS`): optional scenario parameters, each one of the
+#: values the database in use holds.
+CONDITION_SPECS: dict[str, Spec] = {
+    "aerosol_model": Spec("1", CONDITIONS["aerosol_model"][1], **NONNEGATIVE),
+    "atmosphere_profile": Spec("1", CONDITIONS["atmosphere_profile"][1], **NONNEGATIVE),
+    "sun_zenith": Spec("rad", CONDITIONS["sun_zenith"][1], 0.0, math.pi / 2),
+    "sun_azimuth": Spec("rad", CONDITIONS["sun_azimuth"][1], -2 * math.pi, 2 * math.pi),
+    "day_of_year": Spec("1", CONDITIONS["day_of_year"][1], 1.0, 366.0),
+    "ground_altitude": Spec("m", CONDITIONS["ground_altitude"][1], -1000.0, 10000.0),
+}
+
+
+def parameter_spec(name: str) -> Spec:
+    """The :class:`Spec` of a sensor, scenario or condition parameter (KeyError if none)."""
+    for specs in (SENSOR_SPECS, SCENARIO_SPECS, CONDITION_SPECS):
+        if name in specs:
+            return specs[name]
+    raise KeyError(name)
+
 
 PROFILE_DEFAULTS = MappingProxyType({
     "high_altitude_wind_speed": 21.0, "cn2_at_1m": 1.7e-14, "cn2_tropopause": 5.94e-53,
@@ -866,6 +891,12 @@ def scenario(
     cn2_upper_air=2.7e-16,
     cn2_multiplier=1.0,
     cn2_profile=None,
+    aerosol_model=None,
+    atmosphere_profile=None,
+    sun_zenith=None,
+    sun_azimuth=None,
+    day_of_year=None,
+    ground_altitude=None,
 ) -> xr.Dataset:
     """Imaging geometry, atmosphere and target as a validated dataset.
 
@@ -876,7 +907,10 @@ def scenario(
     ground_range : float or xr.DataArray
         Ground distance from the sensor's nadir point to the target, 0-300 km. [m]
     visibility : float or xr.DataArray
-        Meteorological visibility: 23 (MODTRAN rural IHAZE 1) or 5 (IHAZE 2). [km]
+        Meteorological visibility, within the smallest and largest of the atmosphere
+        database in use (the shipped one: 5 to 23 km, generated at 23, MODTRAN rural
+        IHAZE 1, and 5, IHAZE 2; between them interpolated in extinction and flagged
+        ``visibility_interpolated``). [km]
     platform_speed : float or xr.DataArray
         Platform ground speed (blends short and long exposure turbulence). [m/s]
     target_reflectance, background_reflectance : float or xr.DataArray
@@ -904,6 +938,14 @@ def scenario(
         log-linearly along the path in place of Hufnagel-Valley
         (:func:`xbsm.otf.turbulence.cn2_table`). The Hufnagel-Valley parameters must
         then keep their defaults. Stored as the variable ``cn2_profile``.
+    aerosol_model, atmosphere_profile, sun_zenith, sun_azimuth, day_of_year, \
+ground_altitude : float or xr.DataArray, optional
+        Atmosphere conditions (:data:`CONDITION_SPECS`: codes [1], angles [rad],
+        the day [1], the target's altitude above sea level [m]) for a database that holds
+        them as dimensions (:data:`xbsm.atmosphere.CONDITIONS`): each one of the values
+        the database in use holds; a condition it holds with one value may be left out.
+        The shipped database holds none of them (its conditions are fixed: paper
+        Appendix A). Stored only when given.
 
     Returns
     -------
@@ -914,17 +956,39 @@ def scenario(
     values = {name: _validated(name, given[name], spec) for name, spec in SCENARIO_SPECS.items()}
     if cn2_profile is not None:
         values["cn2_profile"] = _profile_table(values, cn2_profile)
+    values.update({name: _validated(name, given[name], spec)
+                   for name, spec in CONDITION_SPECS.items() if given[name] is not None})
+    _check_held(values)
+    return _finish(values, "scenario")
+
+
+def _check_held(values: dict) -> None:
+    """Eager visibility and conditions within what the database in use holds."""
+    held = database_conditions()  # the database in use (xbsm.atmosphere.use_database)
     vis = values["visibility"]
     if vis.chunks is None:
-        held = database_visibilities()  # the database in use (xbsm.atmosphere.use_database)
-        unknown = ~np.isin(vis.values, held)
-        if np.any(unknown):
-            codes = " (MODTRAN IHAZE 1, 2)" if held == VISIBILITIES else ""
+        lo, hi = min(held["visibility"]), max(held["visibility"])
+        outside = (vis.values < lo) | (vis.values > hi)
+        if np.any(outside):
             raise ValueError(
-                f"visibility must be one of {held} km{codes}, the atmosphere database's; "
-                f"got {vis.values[unknown].ravel()[0]!r}"
-            )
-    return _finish(values, "scenario")
+                f"visibility must be within {visibility_range(held['visibility'])}; got "
+                f"{float(vis.values[outside].ravel()[0])!r}")
+    for name in CONDITION_SPECS:
+        if name not in values:
+            continue
+        if name not in held:
+            raise ValueError(
+                f"{name}: the atmosphere database in use holds no {name} dimension (it holds "
+                f"{describe_conditions(held)}); use a database generated for several {name} "
+                "values (xbsm.atmosphere.use_database) or leave it out")
+        value = values[name]
+        if value.chunks is None:
+            known = np.isclose(value.values[..., None], held[name], rtol=CONDITION_RTOL,
+                               atol=0.0).any(axis=-1)
+            if not np.all(known):
+                raise ValueError(
+                    f"{name} must be one of {listed(name, held[name])}, the values of the "
+                    f"atmosphere database in use; got {float(value.values[~known].ravel()[0])!r}")
 
 
 def cn2_table(cn2_profile):
@@ -1119,6 +1183,12 @@ def check_inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> None:
     for kind, ds, specs in (("sensor", sensor, SENSOR_SPECS),
                             ("scenario", scenario, SCENARIO_SPECS)):
         _check_parameters(kind, ds.variables, specs)
+    for name, spec in CONDITION_SPECS.items():  # the optional conditions, where given
+        variable = scenario.variables.get(name)
+        if variable is not None and _is_eager(variable):
+            bad = spec.violated(variable.values)
+            if np.any(bad):
+                _raise(name, spec, variable.values[bad].ravel()[0])
     low, high = (sensor.variables[name] for name in ("wavelength_min", "wavelength_max"))
     if low.ndim or high.ndim or not float(low.values) < float(high.values):
         raise ValueError("wavelength_min and wavelength_max must be scalars with "

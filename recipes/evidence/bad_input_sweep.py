@@ -670,8 +670,8 @@ add("snr.edited_aperture", "snr", "s.assign(aperture_diameter=-0.1) after valida
 add("snr.edited_qe", "snr", "s.assign(quantum_efficiency=2.0) after validation",
     lambda: xbsm.snr(S.assign(quantum_efficiency=2.0), SC), names=("quantum_efficiency",),
     main="snr")
-add("snr.edited_visibility", "snr", "sc.assign(visibility=10.0) after validation",
-    lambda: xbsm.snr(S, SC.assign(visibility=10.0)), names=("visibility",), main="snr")
+add("snr.edited_visibility", "snr", "sc.assign(visibility=50.0) after validation",
+    lambda: xbsm.snr(S, SC.assign(visibility=50.0)), names=("visibility",), main="snr")
 add("snr.edited_range_nan", "snr", "sc.assign(ground_range=nan) after validation",
     lambda: xbsm.snr(S, SC.assign(ground_range=NAN)), names=("ground_range",), main="snr")
 add("snr.dropped_variable", "snr", "s.drop_vars('focal_length')",
@@ -983,7 +983,7 @@ ATM_BAD = [
     ("altitude_inf", dict(altitude=INF), ("altitude",)),
     ("ground_range_far", dict(ground_range=400e3), ("ground_range",)),
     ("ground_range_nan", dict(ground_range=NAN), ("ground_range",)),
-    ("visibility_10", dict(visibility=10.0), ("visibility",)),
+    ("visibility_50", dict(visibility=50.0), ("visibility",)),
     ("visibility_nan", dict(visibility=NAN), ("visibility",)),
     ("interpolation_cubic", dict(interpolation="cubic"), ("interpolation",)),
     ("exact_off_node", dict(interpolation="exact", ground_range=20500.0), ("ground_range",)),

@@ -575,7 +575,9 @@ def test_altitudes_above_24_5_km_interpolate_only_at_ground_range_zero(db):
         ({"altitude": np.nan}, r"altitude must be within"),
         ({"ground_range": -1.0}, r"ground_range must be within \[0, 300000\] m"),
         ({"ground_range": 301e3}, r"ground_range must be within \[0, 300000\] m"),
-        ({"visibility": 10.0}, r"visibility must be one of 23, 5 km"),
+        ({"visibility": 2.0}, r"visibility must be within \[5, 23\] km: the atmosphere "
+                              r"database holds 23, 5 km"),
+        ({"visibility": 50.0}, r"visibility must be within \[5, 23\] km"),
         ({"interpolation": "cubic"}, r"interpolation must be one of"),
         ({"altitude": 1500.0, "interpolation": "exact"},
          r"altitude=1500.0 m is not a database node .* nearest nodes: 1000 and 2000 m"),

@@ -269,15 +269,17 @@ def test_scenario_accepts_the_visibilities_of_the_database_in_use(small, tmp_pat
     relabelled = small.assign_coords(visibility=("visibility", [23.0, 10.0],
                                                  small["visibility"].attrs))
     path = atm.write_database(relabelled, tmp_path / "ten.nc")
-    with pytest.raises(ValueError, match=r"visibility must be one of \(23.0, 5.0\) km"):
-        xbsm.scenario(altitude=9000.0, ground_range=5000.0, visibility=10.0)
+    with pytest.raises(ValueError, match=r"visibility must be within \[5, 23\] km"):
+        xbsm.scenario(altitude=9000.0, ground_range=5000.0, visibility=4.0)
     with atm.use_database(path):
         assert atm.database_visibilities() == (23.0, 10.0)
         scenario = olson_scenario(ground_range=5000.0, visibility=10.0)
         result = xbsm.snr(olson_sensor("nir"), scenario)
-        with pytest.raises(ValueError, match=r"one of \(23.0, 10.0\) km"):
+        with pytest.raises(ValueError, match=r"within \[10, 23\] km: the atmosphere database "
+                                             r"holds 23, 10 km; between them"):
             xbsm.scenario(altitude=9000.0, ground_range=5000.0, visibility=5.0)
-        with pytest.raises(ValueError, match=r"visibility must be one of 23, 10 km; got 5.0"):
+        with pytest.raises(ValueError, match=r"visibility must be within \[10, 23\] km.*; "
+                                             r"got 5.0"):
             atm.atmosphere_at(9000.0, 5000.0, 5.0)
     shipped = xbsm.snr(olson_sensor("nir"), olson_scenario(ground_range=5000.0, visibility=5.0))
     np.testing.assert_array_equal(result["snr"].values, shipped["snr"].values)
@@ -295,11 +297,21 @@ UNSUPPORTED = {
     "another reflectance of GRND_RFLT": (
         lambda ds: ds.assign_attrs(surface_reflectance_of_database=0.2),
         "surface_reflectance_of_database is 0.2"),
-    "a visibility beyond the parameter limits": (
-        lambda ds: ds.assign_coords(visibility=("visibility", [50.0, 23.0],
-                                                ds["visibility"].attrs)),
-        "visibility spans [23, 50] km; xbsm supports only [5, 23] km"),
 }
+
+
+def test_use_database_takes_visibilities_beyond_the_shipped_ones(small, tmp_path):
+    # the 23 km tables relabelled 50 km and the 5 km ones 23 km: a file's own visibility
+    # range is the scenario's (the shipped 5-23 km limits were lifted)
+    relabelled = small.assign_coords(visibility=("visibility", [50.0, 23.0],
+                                                 small["visibility"].attrs))
+    path = atm.write_database(relabelled, tmp_path / "fifty.nc")
+    with atm.use_database(path):
+        scenario = xbsm.scenario(altitude=9000.0, ground_range=5000.0, visibility=30.0)
+        out = atm.atmosphere_at(9000.0, 5000.0, scenario["visibility"])
+        assert int(out["flags"]) == xbsm.flags.flag("visibility_interpolated")
+        with pytest.raises(ValueError, match=r"within \[23, 50\] km"):
+            xbsm.scenario(altitude=9000.0, ground_range=5000.0, visibility=10.0)
 
 
 @pytest.mark.parametrize("case", list(UNSUPPORTED))

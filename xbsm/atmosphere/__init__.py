@@ -64,6 +64,14 @@ Interpolation between database nodes (``interpolation=``):
 
 The leave-one-out errors behind these choices are in ``docs/atmosphere.md``.
 
+Between two of the database's visibilities, each rule runs at both bracketing
+visibility tables and the two are combined in extinction
+(:func:`~xbsm.atmosphere.lookup.across_visibility`: ln TRANS, SURF_EMIS, GRND_RFLT linear
+in 1/visibility, the path radiances linear in the transmission lost), flagged
+``visibility_interpolated``. A database may hold other conditions as dims
+(:data:`~xbsm.atmosphere.database.CONDITIONS`); a scenario selects one of their values
+(``conditions=``), never between them.
+
 At a database node every option returns the stored value exactly. Where a
 bracketing table is missing (beyond the horizon of the lower altitude, or above
 ground range 0 between 24.5 km and 550 km) the spectra are NaN and the
@@ -88,11 +96,13 @@ _PUBLIC = {
         "VARIABLES", "VISIBILITIES",
         "WAVELENGTH_MAX", "WAVELENGTH_MIN", "Database", "database_path",
         "database_wavelengths", "load_database", "open_atmosphere", "use_database",
-        "check_supported", "database_visibilities")},
+        "check_supported", "database_visibilities", "CONDITIONS", "CONDITION_RTOL",
+        "database_conditions", "describe_conditions", "listed", "visibility_range")},
     **{name: "rules" for name in ("INTERPOLATIONS", "RULES", "SCALE_HEIGHT", "Rule")},
     **{name: "lookup" for name in (
         "RELATIVE_EDGE_TOLERANCE", "WAVELENGTH_ATTRS", "atmosphere_at", "band_atmosphere",
-        "band_atmosphere_arrays", "band_wavelengths", "interpolate_database")},
+        "band_atmosphere_arrays", "band_wavelengths", "interpolate_database",
+        "across_visibility", "condition_inputs")},
     **{name: "modtran" for name in (
         "APPENDIX_A", "MODTRAN6_KEYS", "modtran_inputs", "read_tape7", "tables_from_runs")},
     **{name: "tables" for name in (

@@ -3,7 +3,8 @@
 The database (pyBSM 0.16.1's 3430 MODTRAN 5.2.1 runs, see ``NOTICE``) is one NetCDF
 file, ``atmosphere.nc``, with a float32 variable ``atmosphere`` on the dims
 (visibility, altitude, ground_range, component, wavelength) in the database's native
-units. This module is the one place that knows the file: where it is
+units; another database may put condition dims (:data:`CONDITIONS`) before them.
+This module is the one place that knows the file: where it is
 (:func:`database_path`), its facts (the nodes of each coordinate, the limits that
 follow from them, the components and their units), how to open it lazily in SI
 units (:func:`open_atmosphere`) and how to read it into memory once per process
@@ -30,6 +31,7 @@ __all__ = [
     "ALTITUDE_GAP",
     "ALTITUDE_RANGE",
     "COMPONENTS",
+    "CONDITIONS",
     "GROUND_RANGES",
     "GROUND_RANGE_RANGE",
     "IHAZE",
@@ -42,12 +44,16 @@ __all__ = [
     "WAVELENGTH_MIN",
     "Database",
     "check_supported",
+    "database_conditions",
     "database_path",
     "database_visibilities",
     "database_wavelengths",
+    "describe_conditions",
+    "listed",
     "load_database",
     "open_atmosphere",
     "use_database",
+    "visibility_range",
 ]
 
 # ---- the facts (pyBSM 0.16.1's database, paper Appendix A; tests check them against the file)
@@ -95,6 +101,26 @@ ALTITUDE_GAP = (ALTITUDES[-2], ALTITUDES[-1])
 #: reflectance over it (its own constant ``xbsm.radiometry.DATABASE_REFLECTANCE``, which a
 #: test checks equal to this).
 SURFACE_REFLECTANCE = 0.15
+#: The conditions a database file may hold as dimensions besides ``visibility``: name ->
+#: (units, long_name). Each is a 1-d coordinate of the file, strictly increasing, placed
+#: before ``visibility`` in the ``atmosphere`` variable's dims; each is a scenario parameter of
+#: the same name (:func:`xbsm.scenario`) that must be one of the file's values. Codes
+#: (``aerosol_model``, ``atmosphere_profile``) are whole numbers whose meanings the file
+#: names in the coordinate's CF ``flag_values`` / ``flag_meanings``.
+CONDITIONS = MappingProxyType({
+    "aerosol_model": ("1", "aerosol model code (e.g. MODTRAN IHAZE: 1 rural, 4 maritime, "
+                           "5 urban, 6 tropospheric; the file names its codes)"),
+    "atmosphere_profile": ("1", "model atmosphere code (e.g. MODTRAN MODEL: 1 tropical, "
+                                "2 mid-latitude summer, 3 mid-latitude winter, 4 sub-arctic "
+                                "summer, 5 sub-arctic winter, 6 US standard 1976)"),
+    "sun_zenith": ("rad", "solar zenith angle at the target"),
+    "sun_azimuth": ("rad", "solar azimuth angle relative to the line of sight"),
+    "day_of_year": ("1", "day of the year (Earth-Sun distance)"),
+    "ground_altitude": ("m", "altitude of the target (ground) above sea level"),
+})
+#: Relative tolerance within which a scenario's condition equals one of the file's values
+#: (a value converted from degrees twice the same way is equal; one typed differently is not).
+CONDITION_RTOL = 1e-9
 #: Shortest wavelength of the database. [m]
 WAVELENGTH_MIN = 0.3e-6
 #: Longest wavelength of the database. [m]
@@ -140,8 +166,10 @@ def use_database(path):
     ``xbsm.niirs``, :func:`~xbsm.atmosphere.atmosphere_at`, studies and their provenance)
     uses ``path`` inside the block; the file is validated on entry
     (:func:`~xbsm.atmosphere.validate_database`) and checked against what the code
-    supports (:func:`check_supported`); :func:`xbsm.scenario` then accepts the file's
-    visibilities. The setting is a context variable: it holds in
+    supports (:func:`check_supported`); :func:`xbsm.scenario` then accepts any visibility
+    between the file's smallest and largest (interpolated in extinction between them) and
+    the values of its other conditions (:data:`CONDITIONS`), each a scenario parameter
+    of its own name. The setting is a context variable: it holds in
     this thread (and in dask graphs built inside the block, which carry the resolved
     path), not in threads started elsewhere.
 
@@ -181,8 +209,8 @@ def check_supported(path) -> None:
 
     The parameter limits (:mod:`xbsm.params`) and the flags are the shipped database's:
     a file is supported where its coordinates lie inside them. Checked: the file is a
-    valid database (:func:`~xbsm.atmosphere.validate_database`); visibilities within
-    [min, max] of :data:`VISIBILITIES`; altitudes within
+    valid database (:func:`~xbsm.atmosphere.validate_database`: any positive
+    visibilities and any of the :data:`CONDITIONS` as further dimensions); altitudes within
     :data:`ALTITUDE_RANGE` and none strictly between the two of :data:`ALTITUDE_GAP`
     (the flags ``atmosphere_sparse`` and ``atmosphere_inconsistent`` and the
     line-of-sight rules' limit are that gap's); ground ranges within
@@ -211,9 +239,7 @@ def check_supported(path) -> None:
         altitude, ground_range, wavelength = (
             np.asarray(ds[name].values, dtype=np.float64)
             for name in ("altitude", "ground_range", "wavelength"))
-    visibility = np.asarray(ds["visibility"].values, dtype=np.float64)[::-1]  # increasing
-    limits = (("visibility", visibility, (min(VISIBILITIES), max(VISIBILITIES)), "km"),
-              ("altitude", altitude, ALTITUDE_RANGE, "m"),
+    limits = (("altitude", altitude, ALTITUDE_RANGE, "m"),
               ("ground_range", ground_range, GROUND_RANGE_RANGE, "m"),
               ("wavelength", wavelength, (WAVELENGTH_MIN, WAVELENGTH_MAX), "m"))
     for name, values, (lo, hi), units in limits:
@@ -323,15 +349,23 @@ class Database:
     A copy with tables left out (``dataclasses.replace`` with a subset of ``altitude``
     and the matching slices of ``cube`` and ``present``) is a database too: the
     leave-one-out recipe interpolates such copies with
-    :func:`xbsm.atmosphere.interpolate_database`.
+    :func:`xbsm.atmosphere.interpolate_database`. The first axis of ``cube`` and
+    ``present`` is the visibility axis, or with :attr:`conditions` the flattened sets of
+    (conditions..., visibility).
     """
 
     visibility: np.ndarray  # [km]
     altitude: np.ndarray  # [m]
     ground_range: np.ndarray  # [m]
     wavelength: np.ndarray  # [m]
-    cube: np.ndarray  # (visibility, altitude, ground_range, component, wavelength)
-    present: np.ndarray  # (visibility, altitude, ground_range) bool
+    cube: np.ndarray  # (set, altitude, ground_range, component, wavelength)
+    present: np.ndarray  # (set, altitude, ground_range) bool
+    #: The file's conditions besides visibility, ``((name, values), ...)`` in the file's
+    #: order (:data:`CONDITIONS`); empty for the shipped database. The cube's first axis
+    #: runs over the sets of conditions in C order of (conditions..., visibility): set
+    #: ``i`` is ``numpy.unravel_index(i, (*sizes of the conditions, visibility.size))``, so
+    #: without conditions it is the visibility axis.
+    conditions: tuple = ()
 
 
 def load_database(path=None) -> Database:
@@ -375,6 +409,8 @@ def _read(path: str, stamp=None) -> Database:
             cube = nc["atmosphere"][...]
             coords = {name: np.asarray(nc[name][...], dtype=np.float64)
                       for name in ("visibility", "altitude", "ground_range", "wavelength")}
+            conditions = tuple((name, np.asarray(nc[name][...], dtype=np.float64))
+                               for name in nc["atmosphere"].dimensions[:-5])
     except OSError as err:
         raise ValueError(f"path {path!r} is not an xbsm atmosphere database: it cannot be "
                          "read as a NetCDF file (the database is the NetCDF file "
@@ -388,11 +424,12 @@ def _read(path: str, stamp=None) -> Database:
                          "ground_range, wavelength) that recipes/build_atmosphere.py "
                          "writes") from err
     cube = np.ascontiguousarray(cube, dtype=np.float32)
+    cube = cube.reshape(-1, *cube.shape[-4:])  # the sets of conditions: one axis
     cube /= _DIVISOR[:, None]  # float32 / float32: pyBSM's bits; NaN stays NaN
     present = ~np.isnan(cube[:, :, :, 0, 0])
     cube.setflags(write=False)
     present.setflags(write=False)
-    return Database(cube=cube, present=present, **coords)
+    return Database(cube=cube, present=present, conditions=conditions, **coords)
 
 
 def database_visibilities(path=None) -> tuple:
@@ -420,6 +457,76 @@ def _visibilities(path: str, stamp=None) -> tuple:
             return tuple(float(v) for v in np.asarray(nc["visibility"][...], dtype=np.float64))
     except (OSError, RuntimeError, KeyError, IndexError):
         return tuple(float(v) for v in load_database(path).visibility)  # raises the error
+
+
+def database_conditions(path=None) -> dict:
+    """The conditions of the atmosphere database in use: name -> values it holds.
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        Database file; see :func:`database_path` (default: the one in use).
+
+    Returns
+    -------
+    dict
+        ``{"visibility": (...), **{condition: (...)}}``: the file's visibilities [km] and
+        the values of each of its :data:`CONDITIONS` dimensions (in its units), in the
+        file's order.
+    """
+    file = database_path(path)
+    return dict(_conditions(str(file), _stamp(file)))
+
+
+@functools.lru_cache(maxsize=4)
+def _conditions(path: str, stamp=None) -> tuple:
+    """``((name, values), ...)`` of ``path``: its visibility and condition coordinates."""
+    try:
+        with netCDF4.Dataset(path) as nc:
+            names = (*nc["atmosphere"].dimensions[:-5], "visibility")
+            return tuple((name, tuple(float(v) for v in np.asarray(nc[name][...], dtype=float)))
+                         for name in names)
+    except (OSError, RuntimeError, KeyError, IndexError):
+        db = load_database(path)  # raises the error
+        return (*((name, tuple(map(float, values))) for name, values in db.conditions),
+                ("visibility", tuple(map(float, db.visibility))))
+
+
+def visibility_range(visibilities) -> str:
+    """Text giving the visibilities a database accepts: its range and what it holds.
+
+    Parameters
+    ----------
+    visibilities : sequence of float
+        The database's visibilities, in its (decreasing) order. [km]
+    """
+    visibilities = tuple(float(v) for v in visibilities)
+    lo, hi = min(visibilities), max(visibilities)
+    codes = " (MODTRAN IHAZE 1, 2)" if visibilities == VISIBILITIES else ""
+    held = ", ".join(f"{v:g}" for v in visibilities)
+    between = ("; between them the tables are interpolated in extinction"
+               if len(visibilities) > 1 else "")
+    return (f"[{lo:g}, {hi:g}] km: the atmosphere database holds {held} km{codes}"
+            f"{between}")
+
+
+def listed(name, values) -> str:
+    """The values of condition ``name`` with its units, e.g. ``1, 4 [1]``."""
+    return ", ".join(f"{float(v):.10g}" for v in values) + f" [{CONDITIONS[name][0]}]"
+
+
+def describe_conditions(held) -> str:
+    """Text listing the conditions a database holds.
+
+    Parameters
+    ----------
+    held : dict
+        As :func:`database_conditions` returns it.
+    """
+    parts = [f"visibility within {visibility_range(held['visibility'])}"]
+    parts += [f"{name} one of {listed(name, values)}" for name, values in held.items()
+              if name != "visibility"]
+    return "; ".join(parts)
 
 
 def database_wavelengths(path=None) -> np.ndarray:

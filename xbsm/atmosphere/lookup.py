@@ -24,23 +24,29 @@ from ._sight import ACROSS_PATH, ALONG_PATH, along_sight, line_of_sight
 from .database import (
     ALTITUDE_GAP,
     COMPONENTS,
+    CONDITION_RTOL,
+    CONDITIONS,
     LONG_NAMES,
     UNITS,
     VARIABLES,
-    VISIBILITIES,
     database_path,
     database_wavelengths,
+    describe_conditions,
+    listed,
     load_database,
+    visibility_range,
 )
-from .rules import INTERPOLATIONS, RULES, bracket, fixed_range
+from .rules import INTERPOLATIONS, RULES, bracket, fixed_range, interpolate
 
 __all__ = [
     "RELATIVE_EDGE_TOLERANCE",
     "WAVELENGTH_ATTRS",
+    "across_visibility",
     "atmosphere_at",
     "band_atmosphere",
     "band_atmosphere_arrays",
     "band_wavelengths",
+    "condition_inputs",
     "interpolate_database",
 ]
 
@@ -67,8 +73,11 @@ def _rule(interpolation):
     return rule
 
 
-def _validate(altitude, ground_range, visibility, rule, db):
-    """Raise ValueError for inputs outside the database domain (numpy arrays)."""
+def _validate(altitude, ground_range, visibility, rule, db, conditions=()):
+    """Raise ValueError for inputs outside the database domain (numpy arrays).
+
+    ``conditions`` holds the values of each of ``db.conditions``, in its order.
+    """
     checks = (
         ("altitude", altitude, db.altitude, "m"),
         ("ground_range", ground_range, db.ground_range, "m"),
@@ -89,26 +98,81 @@ def _validate(altitude, ground_range, visibility, rule, db):
                     f"(interpolation={rule.name!r}); nearest nodes: "
                     f"{_nearest_nodes(value, nodes)} {units}"
                 )
-    bad = ~np.isin(visibility, db.visibility)
+    bad = ~((visibility >= db.visibility[-1]) & (visibility <= db.visibility[0]))
     if bad.any():
-        codes = " (MODTRAN IHAZE 1, 2)" if tuple(db.visibility) == VISIBILITIES else ""
-        raise ValueError(
-            "visibility must be one of "
-            + ", ".join(f"{v:g}" for v in db.visibility)
-            + f" km{codes}; got {float(visibility[bad].flat[0])!r}"
-        )
+        raise ValueError(f"visibility must be within {visibility_range(db.visibility)}; got "
+                         f"{float(visibility[bad].flat[0])!r}")
+    if rule.nodes_only:
+        off = ~np.isin(visibility, db.visibility)
+        if off.any():
+            raise ValueError(
+                f"visibility={float(visibility[off].flat[0])!r} km is not a database node "
+                f"(interpolation={rule.name!r}); the database holds "
+                + ", ".join(f"{v:g}" for v in db.visibility) + " km")
+    for (name, held), values in zip(db.conditions, conditions, strict=True):
+        bad = ~_held(values, held)
+        if bad.any():
+            raise ValueError(f"{name} must be one of {listed(name, held)}; got "
+                             f"{float(values[bad].flat[0])!r}")
 
 
-class _Scenarios(NamedTuple):
-    """Validated flat scenarios, located in the database (numpy arrays).
+def _holdings(db) -> str:
+    """Text listing every condition ``db`` holds (:func:`describe_conditions`)."""
+    return describe_conditions({**dict(db.conditions), "visibility": db.visibility})
 
-    ``alt`` and ``gr`` are the :func:`~xbsm.atmosphere.rules.bracket` of each altitude and
-    ground range, ``complete`` where all four fixed-range tables exist, ``along`` the
-    line-of-sight tables (``_sight.Sight``, its ``usable`` also requiring those four) or
-    None for a fixed-range rule.
+
+def _held(values, held):
+    """Where ``values`` equal one of ``held`` within :data:`CONDITION_RTOL`."""
+    return np.isclose(values[..., None], held, rtol=CONDITION_RTOL, atol=0.0).any(axis=-1)
+
+
+def _condition_sets(conditions, db, n):
+    """Offset of each scenario's set of conditions in the cube's first axis (numpy)."""
+    index = np.zeros(n, dtype=np.intp)
+    for (_, held), values in zip(db.conditions, conditions, strict=True):
+        nearest = np.abs(values.ravel()[:, None] - held).argmin(axis=1)
+        index = index * held.size + nearest
+    return index * db.visibility.size
+
+
+def condition_inputs(conditions, db) -> list:
+    """The value of each condition of ``db``, in its order, from a name -> value mapping.
+
+    A condition the database holds with one value may be omitted; one it holds with more
+    must be given; a condition it does not hold is refused. The messages list what the
+    database holds.
+    """
+    conditions = dict(conditions or {})
+    held = dict(db.conditions)
+    for name in conditions:
+        if name not in held:
+            raise ValueError(
+                f"{name}: the atmosphere database in use holds no {name} dimension (it holds "
+                f"{_holdings(db)}); use a database generated for several {name} values "
+                "(xbsm.atmosphere.use_database) or leave it out")
+    out = []
+    for name, values in db.conditions:
+        if name in conditions:
+            out.append(conditions[name])
+        elif values.size == 1:
+            out.append(float(values[0]))
+        else:
+            raise ValueError(
+                f"the atmosphere database in use holds {name} = {listed(name, values)}: give "
+                f"the scenario parameter {name} (it holds {_holdings(db)})")
+    return out
+
+
+class _Located(NamedTuple):
+    """Flat scenarios at one visibility table each, located in the database (numpy).
+
+    ``vis`` is each scenario's set of conditions (the cube's first axis), ``alt`` and ``gr``
+    the :func:`~xbsm.atmosphere.rules.bracket` of each altitude and ground range,
+    ``complete`` where all four fixed-range tables exist, ``along`` the line-of-sight
+    tables (``_sight.Sight``, its ``usable`` also requiring those four) or None for a
+    fixed-range rule.
     """
 
-    shape: tuple
     altitude: np.ndarray
     vis: np.ndarray
     alt: tuple
@@ -117,15 +181,23 @@ class _Scenarios(NamedTuple):
     along: object
 
 
-def _scenarios(altitude, ground_range, visibility, rule, db) -> _Scenarios:
-    """Validated flat inputs with their brackets and line-of-sight tables."""
-    altitude, ground_range, visibility = (
-        np.asarray(a, dtype=np.float64) for a in
-        np.broadcast_arrays(altitude, ground_range, visibility))
-    _validate(altitude, ground_range, visibility, rule, db)
-    shape = altitude.shape
-    altitude, ground_range = altitude.ravel(), ground_range.ravel()
-    vis = np.searchsorted(-db.visibility, -visibility.ravel())  # visibility is descending
+class _Scenarios(NamedTuple):
+    """Validated flat scenarios, located at their visibility tables.
+
+    Each is located at its (larger) bracketing visibility's table (``primary``); those
+    between two visibilities (indices ``between``, ``weight`` the lower visibility's weight
+    in 1/visibility) also at the lower one (``secondary``, or None).
+    """
+
+    shape: tuple
+    primary: _Located
+    secondary: _Located | None
+    between: np.ndarray
+    weight: np.ndarray
+
+
+def _located(altitude, ground_range, vis, rule, db) -> _Located:
+    """Flat scenarios' brackets and line-of-sight tables at the tables ``vis``."""
     alt = bracket(altitude, db.altitude, log=rule.log_altitude)
     gr = bracket(ground_range, db.ground_range)
     (a0, a1, _), (g0, g1, _), p = alt, gr, db.present
@@ -135,12 +207,35 @@ def _scenarios(altitude, ground_range, visibility, rule, db) -> _Scenarios:
         along = along_sight(altitude, ground_range, vis, alt, db, rule)
         # never finite where others are NaN
         along = along._replace(usable=along.usable & complete)
-    return _Scenarios(shape, altitude, vis, alt, gr, complete, along)
+    return _Located(altitude, vis, alt, gr, complete, along)
 
 
-def _flags_of(scenarios):
-    """Validity flags of each scenario from its :func:`_scenarios` brackets (numpy)."""
-    shape, altitude, _, _, _, complete, along = scenarios
+def _scenarios(altitude, ground_range, visibility, rule, db, conditions=()) -> _Scenarios:
+    """Validated flat inputs with their brackets and line-of-sight tables.
+
+    Visibility is bracketed in its inverse (extinction grows as 1/visibility, Koschmieder):
+    on a database visibility the scenario has one table set and no ``secondary``.
+    """
+    arrays = np.broadcast_arrays(altitude, ground_range, visibility, *conditions)
+    altitude, ground_range, visibility, *conditions = (
+        np.asarray(a, dtype=np.float64) for a in arrays)
+    _validate(altitude, ground_range, visibility, rule, db, conditions)
+    shape = altitude.shape
+    altitude, ground_range = altitude.ravel(), ground_range.ravel()
+    sets = _condition_sets(conditions, db, altitude.size)
+    v0, v1, weight = bracket(1.0 / visibility.ravel(), 1.0 / db.visibility)
+    primary = _located(altitude, ground_range, sets + v0, rule, db)
+    between = np.flatnonzero(weight > 0.0)
+    secondary = None
+    if between.size:
+        secondary = _located(altitude[between], ground_range[between],
+                             sets[between] + v1[between], rule, db)
+    return _Scenarios(shape, primary, secondary, between, weight[between])
+
+
+def _located_flags(located):
+    """Validity flags of flat located scenarios (numpy)."""
+    altitude, _, _, _, complete, along = located
     out = np.where(complete, 0, flag("beyond_database"))
     sparse = (altitude > ALTITUDE_GAP[0]) & (altitude < ALTITUDE_GAP[1])
     out |= np.where(sparse, flag("atmosphere_sparse"), 0)
@@ -149,27 +244,38 @@ def _flags_of(scenarios):
     if along is not None:
         fallback = complete & ~along.usable & (altitude <= ALTITUDE_GAP[0])
         out |= np.where(fallback, flag("atmosphere_fallback"), 0)
-    return out.astype(np.int32).reshape(shape)
+    return out
 
 
-def _atmosphere_kernel(altitude, ground_range, visibility, wavelength, *, path, interpolation,
-                       window):
+def _flags_of(scenarios):
+    """Validity flags of each scenario from its :func:`_scenarios` brackets (numpy)."""
+    out = _located_flags(scenarios.primary)
+    if scenarios.secondary is not None:
+        out[scenarios.between] |= (_located_flags(scenarios.secondary)
+                                   | flag("visibility_interpolated"))
+    return out.astype(np.int32).reshape(scenarios.shape)
+
+
+def _atmosphere_kernel(altitude, ground_range, visibility, *conditions_and_wavelength, path,
+                       interpolation, window):
     """Each component's spectrum and the validity flags of every scenario (numpy kernel).
 
-    ``wavelength`` only gives the last axis of the spectra (it is the window's); ``path``
-    is the resolved database file (resolved where the graph is built, so that a dask
-    worker reads the file of the caller's :func:`~xbsm.atmosphere.use_database`), or
+    After ``visibility`` come the values of the database's conditions, in its order, then
+    ``wavelength``, which only gives the last axis of the spectra (it is the window's);
+    ``path`` is the resolved database file (resolved where the graph is built, so that a
+    dask worker reads the file of the caller's :func:`~xbsm.atmosphere.use_database`), or
     None for the default one.
     """
+    *conditions, _ = conditions_and_wavelength
     db = load_database(path)
     rule = RULES[interpolation]
-    scenarios = _scenarios(altitude, ground_range, visibility, rule, db)
+    scenarios = _scenarios(altitude, ground_range, visibility, rule, db, conditions)
     spectra = _spectra_of(db, scenarios, rule, window)
     return (*np.moveaxis(spectra, -2, 0), _flags_of(scenarios))
 
 
 def interpolate_database(db, altitude, ground_range, visibility, interpolation,
-                         window=slice(None)):
+                         window=slice(None), conditions=None):
     """Spectra of a database at each scenario, on plain arrays (numpy kernel).
 
     What :func:`atmosphere_at` computes, without labels or flags, for any
@@ -187,6 +293,9 @@ def interpolate_database(db, altitude, ground_range, visibility, interpolation,
         One of :data:`~xbsm.atmosphere.rules.INTERPOLATIONS`.
     window : slice
         Wavelength indices of ``db`` to interpolate (default: all).
+    conditions : dict, optional
+        Condition name -> value(s) for a database with condition dims (as for
+        :func:`atmosphere_at`).
 
     Returns
     -------
@@ -200,13 +309,57 @@ def interpolate_database(db, altitude, ground_range, visibility, interpolation,
         An unknown ``interpolation`` or a scenario outside ``db``'s coverage.
     """
     rule = _rule(interpolation)
-    scenarios = _scenarios(altitude, ground_range, visibility, rule, db)
+    values = condition_inputs(conditions, db)
+    scenarios = _scenarios(altitude, ground_range, visibility, rule, db, values)
     return _spectra_of(db, scenarios, rule, window)
+
+
+def across_visibility(near, far, weight):
+    """The spectra between two visibility tables: the rule in extinction (numpy).
+
+    Parameters
+    ----------
+    near, far : numpy.ndarray
+        (scenario, component, wavelength) at the larger and the smaller bracketing
+        visibility ``V0 > V1``, each already interpolated in altitude and ground range.
+    weight : numpy.ndarray
+        (scenario,) ``w = (1/V - 1/V0) / (1/V1 - 1/V0)``: the weight of ``far`` in the
+        extinction coordinate 1/visibility.
+
+    Returns
+    -------
+    numpy.ndarray
+        TRANS, SURF_EMIS and GRND_RFLT (attenuated along the path) log-linear in ``w``:
+        ``ln T = (1 - w) ln T0 + w ln T1``, the optical depth at fixed path linear in
+        extinction (linear where a value is 0); PTH_THRML and SOL_SCAT linear in the
+        fraction of the transmission lost, ``u = (T0 - T) / (T0 - T1)`` per wavelength
+        (``w`` where ``T0 == T1``), so that a path radiance of Koschmieder's airlight form
+        ``L = L_inf (1 - T)`` is reproduced exactly.
+    """
+    out = np.empty_like(near)
+    out[:, ALONG_PATH] = interpolate(near[:, ALONG_PATH], far[:, ALONG_PATH], weight, "log")
+    t0, t1, t = near[:, 0], far[:, 0], out[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lost = np.clip((t0 - t) / (t0 - t1), 0.0, 1.0)
+    lost = np.where(t0 != t1, lost, weight[:, None])
+    near_path, far_path = near[:, ACROSS_PATH], far[:, ACROSS_PATH]
+    out[:, ACROSS_PATH] = near_path + lost[:, None, :] * (far_path - near_path)
+    return out
 
 
 def _spectra_of(db, scenarios, rule, window):
     """Spectra at each scenario from its :func:`_scenarios` brackets (numpy)."""
-    shape, _, vis, alt, gr, _, along = scenarios
+    out = _located_spectra(db, scenarios.primary, rule, window)
+    if scenarios.secondary is not None:
+        far = _located_spectra(db, scenarios.secondary, rule, window)
+        out[scenarios.between] = across_visibility(out[scenarios.between], far,
+                                                   scenarios.weight)
+    return out.reshape(scenarios.shape + out.shape[-2:])
+
+
+def _located_spectra(db, located, rule, window):
+    """Flat spectra (scenario, component, wavelength) at located scenarios (numpy)."""
+    _, vis, alt, gr, _, along = located
     cube = db.cube[..., window]
     profile = profile_of(db).window(window) if rule.profile else None
     n_comp, n_wl = cube.shape[-2:]
@@ -224,7 +377,7 @@ def _spectra_of(db, scenarios, rule, window):
             continue
         out[s][:, ACROSS_PATH] = fixed(ACROSS_PATH)
         out[s][:, ALONG_PATH] = line_of_sight(cube, vis[s], along.block(s), fixed, profile)
-    return out.reshape(shape + (n_comp, n_wl))
+    return out
 
 
 WAVELENGTH_ATTRS = MappingProxyType({"units": "m", "long_name": "wavelength",
@@ -236,6 +389,7 @@ _INPUT_UNITS = MappingProxyType({"altitude": "m", "ground_range": "m", "visibili
 
 def _as_input(value, name):
     """Convert a float or DataArray input to a float64 DataArray in the database's units."""
+    units = _INPUT_UNITS[name] if name in _INPUT_UNITS else CONDITIONS[name][0]
     if not isinstance(value, xr.DataArray):
         value = xr.DataArray(np.asarray(value))
     for dim in ("wavelength", "component"):
@@ -244,7 +398,7 @@ def _as_input(value, name):
     if value.dtype.kind not in "iuf":
         raise ValueError(f"{name} must be a real number or an xr.DataArray of real numbers; "
                          f"got dtype {value.dtype}")
-    return in_units(name, value.astype(np.float64), _INPUT_UNITS[name])
+    return in_units(name, value.astype(np.float64), units)
 
 
 def _wavelength_window(wavelength, bounds):
@@ -262,7 +416,7 @@ def _wavelength_window(wavelength, bounds):
 
 
 def atmosphere_at(altitude, ground_range, visibility, *, interpolation=None,
-                  wavelength_bounds=None, path=None) -> xr.Dataset:
+                  wavelength_bounds=None, path=None, conditions=None) -> xr.Dataset:
     """Atmospheric transmittance and path radiances for each scenario.
 
     Parameters
@@ -272,7 +426,10 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation=None,
     ground_range : float or xr.DataArray
         Ground range from the sensor nadir point to the target, within [0, 300000]. [m]
     visibility : float or xr.DataArray
-        Meteorological range: 23 (MODTRAN IHAZE 1) or 5 (IHAZE 2). [km]
+        Meteorological range within the database's smallest and largest visibility (the
+        shipped one: 5 to 23 km, generated at 23, MODTRAN IHAZE 1, and 5, IHAZE 2);
+        between two of the database's visibilities the spectra are interpolated in
+        extinction (:func:`across_visibility`) and flagged ``visibility_interpolated``. [km]
     interpolation : {"extinction-profile", "optical-depth-cubic", "same-elevation", \
 "log-linear", "linear", "exact"}, optional
         Rule between database nodes; see the module docstring. Default: the rule of the
@@ -285,6 +442,11 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation=None,
         comparison, as pyBSM selects a band); only these are interpolated. [m]
     path : str or os.PathLike, optional
         Database file; see :func:`database_path`.
+    conditions : dict, optional
+        For a database with condition dims (:data:`~xbsm.atmosphere.database.CONDITIONS`):
+        name -> float or xr.DataArray, each one of the values the database holds (in that
+        condition's units); a condition the database holds with a single value may be left
+        out. A condition the database does not hold is refused.
 
     Returns
     -------
@@ -295,12 +457,14 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation=None,
         variable; ``beyond_database`` where the spectra are NaN,
         ``atmosphere_sparse`` between 24.5 km and 550 km, ``atmosphere_inconsistent``
         above 24.5 km, ``atmosphere_fallback`` where a line-of-sight rule fell back
-        to ``"log-linear"``).
+        to ``"log-linear"``, ``visibility_interpolated`` between two database
+        visibilities).
 
     Raises
     ------
     ValueError
-        An input outside the database domain, an off-node input with
+        An input outside the database domain (a visibility outside its range, a condition
+        value it does not hold: the message lists what it holds), an off-node input with
         ``interpolation="exact"``, or an unknown ``interpolation``. With
         dask-backed inputs the values are checked when the result is computed.
 
@@ -321,14 +485,17 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation=None,
     wavelength = db.wavelength[window]
     inputs = [_as_input(altitude, "altitude"), _as_input(ground_range, "ground_range"),
               _as_input(visibility, "visibility")]
+    inputs += [_as_input(value, name) for (name, _), value in
+               zip(db.conditions, condition_inputs(conditions, db), strict=True)]
     if not any(a.chunks is not None for a in inputs):
         # eager inputs: fail at the call, not inside the kernel
-        _validate(*(np.asarray(a.values) for a in inputs), rule, db)
+        arrays = [np.asarray(a.values) for a in inputs]  # each checked on its own dims
+        _validate(*arrays[:3], rule, db, arrays[3:])
 
     wl = xr.DataArray(wavelength, dims="wavelength", attrs=dict(WAVELENGTH_ATTRS))
     wl = wl.assign_coords(wavelength=wl)
     *spectra, flags = apply_kernel(
-        _atmosphere_kernel, *inputs, wl, core=[[], [], [], ["wavelength"]],
+        _atmosphere_kernel, *inputs, wl, core=[[]] * len(inputs) + [["wavelength"]],
         outputs=[("wavelength",)] * len(COMPONENTS) + [()],
         dtype=[np.float64] * len(COMPONENTS) + [np.int32],
         path=str(database_path(path)), interpolation=interpolation,
@@ -387,7 +554,7 @@ def band_wavelengths(wavelength_min: float, wavelength_max: float, band_edges: s
 
 
 def band_atmosphere(altitude, ground_range, visibility, wavelength_min, wavelength_max, *,
-                    interpolation, band_edges, path=None) -> xr.Dataset:
+                    interpolation, band_edges, path=None, conditions=None) -> xr.Dataset:
     """Atmosphere over a sensor's band for every scenario.
 
     Parameters
@@ -402,6 +569,8 @@ def band_atmosphere(altitude, ground_range, visibility, wavelength_min, waveleng
         As for :func:`band_wavelengths`.
     path : str or os.PathLike, optional
         Database file; see :func:`database_path`.
+    conditions : dict, optional
+        As for :func:`atmosphere_at`.
 
     Returns
     -------
@@ -411,7 +580,7 @@ def band_atmosphere(altitude, ground_range, visibility, wavelength_min, waveleng
     samples, bounds = band_wavelengths(float(wavelength_min), float(wavelength_max),
                                        band_edges, path)
     atm = atmosphere_at(altitude, ground_range, visibility, interpolation=interpolation,
-                        wavelength_bounds=bounds, path=path)
+                        wavelength_bounds=bounds, path=path, conditions=conditions)
     if atm.sizes["wavelength"] < 2:
         raise ValueError(
             "the band [wavelength_min, wavelength_max] must span at least two database "
@@ -428,12 +597,13 @@ def band_atmosphere(altitude, ground_range, visibility, wavelength_min, waveleng
 
 
 def band_atmosphere_arrays(altitude, ground_range, visibility, wavelength_min, wavelength_max,
-                           *, interpolation, band_edges) -> dict | None:
+                           *, interpolation, band_edges, conditions=None) -> dict | None:
     """:func:`band_atmosphere` of one eager scenario on plain arrays, or None.
 
     Returns ``wavelength``, the spectra of :data:`VARIABLES` over it and ``flags``; None
-    for a band that spans fewer than two database wavelengths (:func:`band_atmosphere`
-    raises the error). The inputs are in the database's units and already checked.
+    for a band that spans fewer than two database wavelengths, or conditions the database
+    does not match (:func:`band_atmosphere` raises the error). The inputs are in the
+    database's units and already checked; ``conditions`` as for :func:`atmosphere_at`.
     """
     samples, bounds = band_wavelengths(float(wavelength_min), float(wavelength_max),
                                        band_edges)
@@ -442,8 +612,13 @@ def band_atmosphere_arrays(altitude, ground_range, visibility, wavelength_min, w
     wavelength = db.wavelength[window]
     if wavelength.size < 2:
         return None
-    *spectra, flags = _atmosphere_kernel(altitude, ground_range, visibility, wavelength,
-                                         path=None, interpolation=interpolation, window=window)
+    try:
+        values = condition_inputs(conditions, db)
+    except ValueError:
+        return None
+    *spectra, flags = _atmosphere_kernel(altitude, ground_range, visibility, *values,
+                                         wavelength, path=None, interpolation=interpolation,
+                                         window=window)
     if samples is not None and not np.array_equal(samples, wavelength):
         spectra = [np.interp(samples, wavelength, s) for s in spectra]
         wavelength = samples

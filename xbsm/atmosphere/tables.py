@@ -2,8 +2,10 @@
 
 The database file is a contract (``docs/atmosphere.md``, "The database file"): one
 float32 variable ``atmosphere`` on (visibility, altitude, ground_range, component,
-wavelength) in the file's units (TRANS ``1``, radiances ``W sr-1 cm-2 um-1``), NaN where
-a table has no entry. :func:`from_tables` turns arrays (or a DataArray) into that cube as
+wavelength), optionally after condition dims
+(:data:`~xbsm.atmosphere.database.CONDITIONS`), in the file's units (TRANS ``1``,
+radiances ``W sr-1 cm-2 um-1``), NaN where a table has no entry.
+:func:`from_tables` turns arrays (or a DataArray) into that cube as
 an :class:`xarray.Dataset` and validates it; :func:`validate_database` checks a cube (one
 :func:`from_tables` made, or the file opened with :func:`xarray.open_dataset`) and names
 the coordinate or the cell that breaks the contract; :func:`write_database` writes it as
@@ -21,7 +23,7 @@ import numpy as np
 import xarray as xr
 
 from ..constants import EARTH_RADIUS
-from .database import COMPONENTS
+from .database import COMPONENTS, CONDITIONS
 
 __all__ = [
     "DIMS",
@@ -79,18 +81,19 @@ def horizon(altitude, radius_factor=1.0):
 def from_tables(tables, *, visibility=None, altitude=None, ground_range=None,
                 wavelength=None, ihaze=None, ihaze_meanings=None, component_units=FILE_UNITS,
                 component_long_names=None, attrs=None, variable_attrs=None,
-                coordinate_attrs=None) -> xr.Dataset:
+                coordinate_attrs=None, conditions=None) -> xr.Dataset:
     """An atmosphere cube in the database file's schema, validated.
 
     Parameters
     ----------
     tables : numpy.ndarray or xr.DataArray
-        float32-representable values on (visibility, altitude, ground_range, component,
-        wavelength), components in the order of
+        float32-representable values on (conditions..., visibility, altitude,
+        ground_range, component, wavelength), components in the order of
         :data:`~xbsm.atmosphere.database.COMPONENTS` (TRANS, PTH_THRML, SURF_EMIS,
         SOL_SCAT, GRND_RFLT), in ``component_units``; NaN (the whole spectrum) where a
         table has no entry. A DataArray with those dims may carry the coordinates (the
         keyword arguments then default to them) and ``attrs`` (the conditions).
+        The leading condition dims, if any, are ``conditions``' (or the DataArray's).
     visibility : sequence of float
         Meteorological range of each table set, strictly decreasing. [km]
     altitude : sequence of float
@@ -116,7 +119,14 @@ def from_tables(tables, *, visibility=None, altitude=None, ground_range=None,
         Attributes of the ``atmosphere`` variable (default: a ``long_name``).
     coordinate_attrs : dict, optional
         Coordinate name -> attributes added to (or replacing) its standard ones (units,
-        long_name...), e.g. a ``comment``; units cannot be changed.
+        long_name...), e.g. a ``comment``; units cannot be changed. A code condition
+        (``aerosol_model``, ``atmosphere_profile``) names its codes here with CF
+        ``flag_values`` and ``flag_meanings``.
+    conditions : dict, optional
+        Condition name (one of :data:`~xbsm.atmosphere.database.CONDITIONS`) -> its
+        values, strictly increasing, in that condition's units, in the order of the leading
+        dims of ``tables``: each becomes a dimension of the cube that a scenario selects by
+        the parameter of the same name. Default: none (or a DataArray's leading dims).
 
     Returns
     -------
@@ -131,29 +141,39 @@ def from_tables(tables, *, visibility=None, altitude=None, ground_range=None,
     """
     given = {"visibility": visibility, "altitude": altitude, "ground_range": ground_range,
              "wavelength": wavelength}
-    values, coords, ihaze, merged_attrs = _read_input(tables, given, ihaze, attrs)
-    cube = _float32_cube(values, coords)
+    conditions = dict(conditions or {})
+    values, coords, ihaze, merged_attrs = _read_input(tables, given, ihaze, attrs, conditions)
+    dims = (*conditions, *DIMS)
+    cube = _float32_cube(values, coords, dims)
     ds_coords = _cube_coordinates(coords, component_units, component_long_names, ihaze,
-                                  ihaze_meanings, coordinate_attrs)
+                                  ihaze_meanings, coordinate_attrs, conditions)
     var_attrs = dict(variable_attrs or {
         "long_name": "path transmittance and radiance components (raw values in the file's "
                      "units)"})
-    ds = xr.Dataset({"atmosphere": (DIMS, cube, var_attrs)}, coords=ds_coords,
+    ds = xr.Dataset({"atmosphere": (dims, cube, var_attrs)}, coords=ds_coords,
                     attrs=merged_attrs)
     validate_database(ds)
     return ds
 
 
-def _read_input(tables, given, ihaze, attrs):
+def _read_input(tables, given, ihaze, attrs, conditions):
     """Values, numeric coordinates, IHAZE codes and global attributes of the input.
 
-    A DataArray's own coordinates and attributes fill what :func:`from_tables` was not given.
+    A DataArray's own coordinates and attributes fill what :func:`from_tables` was not given;
+    its leading dims are conditions (added to ``conditions`` in place).
     """
     merged_attrs = {}
     if isinstance(tables, xr.DataArray):
-        if tables.dims != DIMS:
-            raise ValueError(f"tables must have the dims {DIMS} in this order; got "
-                             f"{tables.dims}")
+        leading = tables.dims[:-len(DIMS)] if len(tables.dims) > len(DIMS) else ()
+        if tables.dims[len(leading):] != DIMS or (conditions and tuple(conditions) != leading):
+            raise ValueError(f"tables must have the dims {(*conditions, *DIMS)} in this "
+                             f"order; got {tables.dims}")
+        for name in leading:
+            if name not in conditions and name in tables.coords:
+                conditions[name] = tables[name].values
+        missing = [name for name in leading if name not in conditions]
+        if missing:
+            raise ValueError(f"tables' condition dim(s) {', '.join(missing)} need coordinates")
         for name in given:
             if given[name] is None and name in tables.coords:
                 given[name] = tables[name].values
@@ -168,35 +188,44 @@ def _read_input(tables, given, ihaze, attrs):
     if missing:
         raise ValueError(f"from_tables needs the coordinate(s) {', '.join(missing)} (as "
                          "keyword arguments or coordinates of the DataArray)")
+    unknown = [name for name in conditions if name not in CONDITIONS]
+    if unknown:
+        raise ValueError(f"conditions must be among {', '.join(CONDITIONS)}; got "
+                         f"{', '.join(map(repr, unknown))}")
     coords = {name: np.asarray(value, dtype=np.float64) for name, value in given.items()}
+    coords.update({name: np.asarray(value, dtype=np.float64)
+                   for name, value in conditions.items()})
     return values, coords, ihaze, merged_attrs
 
 
-def _float32_cube(values, coords):
+def _float32_cube(values, coords, dims=DIMS):
     """``values`` as float32, once their shape matches ``coords`` and every value fits."""
-    if values.ndim != len(DIMS):
-        raise ValueError(f"tables must have 5 dims {DIMS}; got shape {values.shape}")
-    expected = (coords["visibility"].size, coords["altitude"].size,
-                coords["ground_range"].size, len(COMPONENTS), coords["wavelength"].size)
+    if values.ndim != len(dims):
+        raise ValueError(f"tables must have {len(dims)} dims {dims}; got shape {values.shape}")
+    expected = tuple(len(COMPONENTS) if dim == "component" else coords[dim].size
+                     for dim in dims)
     if values.shape != expected:
         raise ValueError(f"tables has shape {values.shape}; the coordinates give {expected} "
-                         f"({', '.join(DIMS)})")
+                         f"({', '.join(dims)})")
     if values.dtype.kind != "f":
         raise ValueError(f"tables must be floating point; got dtype {values.dtype}")
     cube = values.astype(np.float32)
     with np.errstate(over="ignore", invalid="ignore"):
         overflow = np.isfinite(values) & ~np.isfinite(cube)
     if overflow.any():
-        raise ValueError(f"tables value at {_cell(np.argwhere(overflow)[0], coords)} does not "
-                         "fit in float32")
+        raise ValueError(f"tables value at {_cell(np.argwhere(overflow)[0], coords, dims)} "
+                         "does not fit in float32")
     return cube
 
 
 def _cube_coordinates(coords, component_units, component_long_names, ihaze, ihaze_meanings,
-                      coordinate_attrs):
+                      coordinate_attrs, conditions=()):
     """The cube's coordinates with their attributes, as the file holds them."""
-    ds_coords = {name: (name, coords[name], dict(_COORD_ATTRS[name]))
-                 for name in ("visibility", "altitude", "ground_range", "wavelength")}
+    ds_coords = {name: (name, coords[name], {"units": CONDITIONS[name][0],
+                                             "long_name": CONDITIONS[name][1]})
+                 for name in conditions}
+    ds_coords.update({name: (name, coords[name], dict(_COORD_ATTRS[name]))
+                      for name in ("visibility", "altitude", "ground_range", "wavelength")})
     ds_coords["component"] = ("component", np.array(COMPONENTS, dtype=object),
                               {"long_name": "MODTRAN tape 7 column name"})
     ds_coords["component_units"] = ("component", np.array(list(component_units), dtype=object),
@@ -219,10 +248,18 @@ def _cube_coordinates(coords, component_units, component_long_names, ihaze, ihaz
     return ds_coords
 
 
-def _cell(index, coords):
-    """Text naming the cell ``index`` of the cube by its coordinates."""
+def _cell(index, coords, dims=DIMS):
+    """Text naming the cell ``index`` of the cube by its coordinates.
+
+    With conditions, ``index`` may start with the flattened set of (conditions...,
+    visibility) (as :func:`_check_values` indexes), named here by each condition.
+    """
+    conditions = list(dims[:-len(DIMS)])
+    if conditions and len(index) <= len(DIMS):
+        sizes = [coords[name].size for name in (*conditions, "visibility")]
+        index = (*np.unravel_index(int(index[0]), sizes), *index[1:])
     parts = []
-    for dim, i in zip(DIMS, index, strict=False):
+    for dim, i in zip(dims, index, strict=False):
         i = int(i)
         if dim == "component":
             parts.append(f"component={COMPONENTS[i]}")
@@ -276,11 +313,13 @@ def validate_database(cube: xr.Dataset) -> None:
     if "atmosphere" not in cube.data_vars:
         raise ValueError("the database must hold the variable 'atmosphere'")
     var = cube["atmosphere"]
-    if var.dims != DIMS:
-        raise ValueError(f"variable atmosphere must have the dims {DIMS}; got {var.dims}")
+    conditions = var.dims[:-len(DIMS)] if len(var.dims) > len(DIMS) else ()
+    if var.dims[len(conditions):] != DIMS or any(c not in CONDITIONS for c in conditions):
+        raise ValueError(f"variable atmosphere must have the dims {DIMS}, optionally after "
+                         f"conditions among {', '.join(CONDITIONS)}; got {var.dims}")
     if var.dtype != np.float32:
         raise ValueError(f"variable atmosphere must be float32; got {var.dtype}")
-    coords = {}
+    coords = _condition_coordinates(cube, conditions)
     for name, units in _COORD_UNITS.items():
         if name not in cube.coords:
             raise ValueError(f"the database lacks the coordinate {name}")
@@ -317,11 +356,30 @@ def validate_database(cube: xr.Dataset) -> None:
     if not (isinstance(reflectance, (float, np.floating)) and 0.0 < reflectance <= 1.0):
         raise ValueError("attribute surface_reflectance_of_database must be a float in (0, 1]; "
                          f"got {reflectance!r}")
-    _check_values(np.asarray(var.values), coords)
+    _check_values(np.asarray(var.values), coords, var.dims)
 
 
-def _check_values(values, coords):
+def _condition_coordinates(cube, conditions):
+    """Each condition's coordinate: present, in its units, finite, strictly increasing."""
+    coords = {}
+    for name in conditions:
+        units = CONDITIONS[name][0]
+        if name not in cube.coords:
+            raise ValueError(f"the database lacks the coordinate {name} of its condition dim")
+        got = cube[name].attrs.get("units")
+        if got != units:
+            raise ValueError(f"coordinate {name} must have units {units!r}; got {got!r}")
+        coords[name] = np.asarray(cube[name].values, dtype=np.float64)
+        _strict(name, coords[name])
+        if units == "1" and not np.array_equal(coords[name], np.round(coords[name])):
+            raise ValueError(f"coordinate {name} holds codes: whole numbers; got "
+                             f"{coords[name].tolist()}")
+    return coords
+
+
+def _check_values(values, coords, dims=DIMS):
     """The cells: whole, a prefix up to the horizon, TRANS in [0, 1], radiances >= 0."""
+    values = values.reshape(-1, *values.shape[-4:])  # the sets of conditions: one axis
     finite = np.isfinite(values)
     present = finite.all(axis=(3, 4))
     partial = finite.any(axis=(3, 4)) & ~present
@@ -329,7 +387,7 @@ def _check_values(values, coords):
         v, a, g = np.argwhere(partial)[0]
         c, k = np.argwhere(~finite[v, a, g])[0]
         raise ValueError(f"a table is either wholly present or wholly NaN; the cell "
-                         f"{_cell((v, a, g, c, k), coords)} is NaN (or infinite) in a table "
+                         f"{_cell((v, a, g, c, k), coords, dims)} is NaN (or infinite) in a table "
                          "that has values")
     reach = horizon(coords["altitude"], _REFRACTED_RADIUS)
     ground_range = coords["ground_range"]
@@ -341,12 +399,13 @@ def _check_values(values, coords):
                 g = n + int(row[n:].argmax())
                 raise ValueError(
                     "the ground ranges of each (visibility, altitude) must be a prefix of the "
-                    f"grid (NaN beyond); at {_cell((v, a), coords)} ground_range="
+                    f"grid (NaN beyond); at {_cell((v, a), coords, dims)} ground_range="
                     f"{float(ground_range[n])!r} is missing but ground_range="
                     f"{float(ground_range[g])!r} is present")
             if n and ground_range[n - 1] > reach[a]:
                 raise ValueError(
-                    f"at {_cell((v, a), coords)} ground_range={float(ground_range[n - 1])!r} m is "
+                    f"at {_cell((v, a), coords, dims)} ground_range="
+                    f"{float(ground_range[n - 1])!r} m is "
                     f"beyond the horizon ({reach[a]:.6g} m with standard refraction, an Earth "
                     f"of radius 4/3 x {EARTH_RADIUS:g} m): a sensor cannot see it; make it NaN")
     trans = values[:, :, :, 0]
@@ -354,12 +413,12 @@ def _check_values(values, coords):
     if bad.any():
         v, a, g, k = np.argwhere(bad)[0]
         raise ValueError(f"TRANS must be within [0, 1]; {float(trans[v, a, g, k])!r} at "
-                         f"{_cell((v, a, g, 0, k), coords)}")
+                         f"{_cell((v, a, g, 0, k), coords, dims)}")
     bad = finite[:, :, :, 1:] & (values[:, :, :, 1:] < 0.0)
     if bad.any():
         v, a, g, c, k = np.argwhere(bad)[0]
         raise ValueError(f"radiances must be >= 0; {float(values[v, a, g, c + 1, k])!r} at "
-                         f"{_cell((v, a, g, c + 1, k), coords)}")
+                         f"{_cell((v, a, g, c + 1, k), coords, dims)}")
 
 
 def _var_attrs(da):
@@ -402,12 +461,14 @@ def write_database(cube: xr.Dataset, path, *, complevel: int = 4) -> Path:
         raise ValueError(f"complevel must be an integer in [1, 9]; got {complevel!r}")
     validate_database(cube)
     path = Path(path)
-    sizes = [cube.sizes[d] for d in DIMS]
+    dims = cube["atmosphere"].dims  # the conditions, if any, then DIMS
+    sizes = [cube.sizes[d] for d in dims]
+    order = (*dims[:-len(DIMS)], *_ORDER)
     with netCDF4.Dataset(path, "w", format="NETCDF4") as nc:
         nc.setncatts(dict(cube.attrs))
-        for dim, size in zip(DIMS, sizes, strict=True):
+        for dim, size in zip(dims, sizes, strict=True):
             nc.createDimension(dim, size)
-        for name in _ORDER:
+        for name in order:
             if name not in cube.variables:
                 continue
             da = cube[name]
@@ -420,11 +481,11 @@ def write_database(cube: xr.Dataset, path, *, complevel: int = 4) -> Path:
                 var = nc.createVariable(name, kind, da.dims)
                 var.setncatts(_var_attrs(da))
                 var[:] = da.values
-        var = nc.createVariable("atmosphere", "f4", DIMS, zlib=True, complevel=complevel,
+        var = nc.createVariable("atmosphere", "f4", dims, zlib=True, complevel=complevel,
                                 shuffle=True, fill_value=np.float32(np.nan),
-                                chunksizes=(1, 1, *sizes[2:]))
+                                chunksizes=(*(1,) * (len(dims) - 3), *sizes[-3:]))
         attrs = _var_attrs(cube["atmosphere"])
-        auxiliary = [n for n in _ORDER if n in cube.coords and n not in DIMS]
+        auxiliary = [n for n in _ORDER if n in cube.coords and n not in dims]
         ordered = {"long_name": attrs.pop("long_name")} if "long_name" in attrs else {}
         if auxiliary:
             ordered["coordinates"] = " ".join(auxiliary)

@@ -127,10 +127,12 @@ def units_of(da: xr.DataArray) -> str:
     """The ``units`` attribute, else those of the sensor or scenario parameter of that name."""
     if "units" in da.attrs:
         return str(da.attrs["units"])
-    from ..params import SCENARIO_SPECS, SENSOR_SPECS
+    from ..params import parameter_spec
 
-    spec = SENSOR_SPECS.get(str(da.name)) or SCENARIO_SPECS.get(str(da.name))
-    return spec.units if spec is not None else "1"
+    try:
+        return parameter_spec(str(da.name)).units
+    except KeyError:
+        return "1"
 
 
 def axis_label(name: str, units: str, values) -> tuple[float, str]:
@@ -155,12 +157,12 @@ def context_of(ds: xr.Dataset) -> Context:
     The fixed parameters are those a study result records in its attributes
     (:mod:`xbsm.study.attributes`); a result without them gets no such line.
     """
-    from ..params import SCENARIO_SPECS, SENSOR_SPECS
+    from ..params import SENSOR_SPECS, parameter_spec
     from ..study.attributes import parameters_of
 
     sensor, scenario = parameters_of(ds)
     lines = [str(ds.attrs["title"])] if ds.attrs.get("title") else []
-    fixed = [f"{words(k)} {with_unit(v, SCENARIO_SPECS[k].units)}" for k, v in scenario.items()]
+    fixed = [f"{words(k)} {with_unit(v, parameter_spec(k).units)}" for k, v in scenario.items()]
     fixed += [f"{text} {with_unit(sensor[k], SENSOR_SPECS[k].units)}"
               for k, text in _KEY_SENSOR.items() if k in sensor and k not in ds.coords]
     if "band" not in ds.dims and {"wavelength_min", "wavelength_max"} <= set(sensor):

@@ -132,7 +132,7 @@ def _parameter(src: Source, table: str, key: str, value):
         return _kernel(src, table, key, value)
     if key in params.SPECTRAL and isinstance(value, dict):
         return _curve(src, table, key, value)
-    units = (params.SENSOR_SPECS.get(key) or params.SCENARIO_SPECS[key]).units
+    units = params.parameter_spec(key).units
     curve = (" or a curve {wavelength = [...], values = [...]}" if key in params.SPECTRAL
              else "")
     hint = ("; to sweep it, move it to [sweep]" if isinstance(value, (list, dict))

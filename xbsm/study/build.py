@@ -90,7 +90,7 @@ def _coords(study: Study) -> dict:
 
 
 def _attrs(name: str) -> dict:
-    spec = params.SENSOR_SPECS.get(name) or params.SCENARIO_SPECS[name]
+    spec = params.parameter_spec(name)
     return {"units": spec.units, "long_name": spec.long_name}
 
 

@@ -133,7 +133,8 @@ class Study:
 
 def _values_text(name: str, values) -> str:
     """A swept parameter's values in a few words: a short list, or count and span."""
-    spec = params.SENSOR_SPECS.get(name) or params.SCENARIO_SPECS.get(name)
+    spec = params.SENSOR_SPECS.get(name) or params.SCENARIO_SPECS.get(name) \
+        or params.CONDITION_SPECS.get(name)
     units = f" {spec.units}" if spec is not None and spec.units not in ("", "1") else ""
     values = np.asarray(values, dtype=float)
     if len(values) <= 4:
