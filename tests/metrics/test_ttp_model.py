@@ -182,3 +182,17 @@ def test_smallest_aperture_reaching_p_0_6_through_study_min_parameter():
     upper = xbsm.target_acquisition(mwir(smallest * 1.03), path(2500.0), vehicle())
     assert float(lower.probability.sel(task="identify").squeeze()) < 0.6
     assert float(upper.probability.sel(task="identify").squeeze()) > 0.6
+
+
+def test_standard_figure_draws_one_line_per_task(sweep):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ax = xbsm.plot.probability_against_range(sweep)
+    labels = [line.get_label() for line in ax.get_lines()]
+    assert [label for label in labels if not label.startswith("_")][:3] == [
+        "task = detect", "task = recognize", "task = identify"]
+    assert ax.get_ylim() == (0.0, 1.0)
+    plt.close(ax.figure)

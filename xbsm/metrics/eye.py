@@ -111,7 +111,7 @@ def ctf_vollmerhausen(frequency, luminance, field_size, eyes=2):
 
 
 def pupil_diameter(luminance, field_size):
-    r"""Diameter of the eye's pupil (Barten's formula). [mm]
+    r"""Diameter of the eye's pupil (Barten's formula) [mm].
 
     .. math:: d = 5 - 3 \tanh\left(0.4 \log_{10}\frac{L\,X_0^2}{40^2}\right)
 
@@ -121,7 +121,7 @@ def pupil_diameter(luminance, field_size):
 
 
 def eye_mtf(frequency, luminance, field_size=10.0):
-    r"""Optical MTF of the eye against frequency at the eye (Barten). [1]
+    r"""Optical MTF of the eye against frequency at the eye (Barten) [1].
 
     .. math:: M_{opt}(f) = e^{-2\pi^2\sigma^2 f^2},\quad
         \sigma = \sqrt{\sigma_0^2 + (C_{ab}\,d)^2}
@@ -134,7 +134,7 @@ def eye_mtf(frequency, luminance, field_size=10.0):
 
 
 def csf_barten(frequency, luminance, field_size):
-    r"""Contrast sensitivity of the eye, Barten's physical model, against frequency. [1]
+    r"""Contrast sensitivity of the eye, Barten's physical model, against frequency [1].
 
     Parameters
     ----------
@@ -173,7 +173,7 @@ def csf_barten(frequency, luminance, field_size):
 
 
 def eye_ctf(frequency, luminance, field_size, eye="vollmerhausen", eyes=2):
-    """Contrast threshold of the eye by model name (:data:`EYE_MODELS`). [1]
+    """Contrast threshold of the eye by model name (:data:`EYE_MODELS`) [1].
 
     ``frequency`` at the eye [cycles/deg], ``luminance`` [cd/m^2], ``field_size`` [deg];
     ``eyes`` scales the binocular threshold by sqrt(2 / eyes) for either model.
@@ -187,7 +187,7 @@ def eye_ctf(frequency, luminance, field_size, eye="vollmerhausen", eyes=2):
 
 
 def visual_channel(frequency, centre):
-    r"""Gain of the visual channel centred on ``centre`` at ``frequency``. [1]
+    r"""Gain of the visual channel centred on ``centre`` at ``frequency`` [1].
 
     .. math:: B(f) = \exp\left(-2.2\,\ln^2\frac{f}{f_0}\right)
 

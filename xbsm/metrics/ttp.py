@@ -101,7 +101,7 @@ def task_probability(cycles, v50, offset=TTPF_OFFSET, slope=TTPF_SLOPE):
 
 
 def johnson_probability(cycles, n50):
-    r"""Probability of a task by the Johnson criteria. [1]
+    r"""Probability of a task by the Johnson criteria [1].
 
     .. math:: P = \frac{(N/N_{50})^E}{1 + (N/N_{50})^E},\qquad E = 2.7 + 0.7\,N/N_{50}
     """
@@ -164,7 +164,7 @@ def noise_bandwidths(frequency, spacing, magnification, luminance):
 
 
 def aliasing_ratio(frequency, mtf, spacing):
-    r"""Power of the pre-sample MTF above the Nyquist frequency over that below it. [1]
+    r"""Power of the pre-sample MTF above the Nyquist frequency over that below it [1].
 
     .. math:: R = \frac{\int_{1/(2\delta)}^{1/\delta} |H_{pre}|^2\,d\xi}
         {\int_0^{1/(2\delta)} |H_{pre}|^2\,d\xi}
@@ -335,8 +335,10 @@ def targeting(frequency, mtf, spacing, snr, slant_range, size, *, display_pixel_
 
 def _targeting_block(frequency, mtf, spacing, magnification, channel, full, snr,
                      slant_range, size, **knobs):
-    """:func:`targeting_arrays` with the system CTF and the field size, every output on the
-    block's whole broadcast shape (as ``apply_ufunc`` requires)."""
+    """:func:`targeting_arrays` with the system CTF and the field size.
+
+    Every output on the block's whole broadcast shape (as ``apply_ufunc`` requires).
+    """
     frequency = np.asarray(frequency).reshape(-1)
     shape = np.broadcast_shapes(np.shape(mtf)[:-2], np.shape(channel)[:-2], np.shape(snr),
                                 np.shape(slant_range), np.shape(size),
@@ -363,7 +365,7 @@ def probabilities(cycles, table, criterion="ttp") -> xr.DataArray:
 
 
 def cycles_for_probability(probability, v50, criterion="ttp"):
-    r"""Cycles on target at which a task reaches ``probability`` (inverse of P(task)). [1]
+    r"""Cycles on target at which a task reaches ``probability`` (inverse of P(task)) [1].
 
     Solves P(V) = p for V by bisection on V / V50 in (0, 50] (P rises monotonically
     with V), to 1e-12 relative; ``probability`` in (0, 1), arrays broadcast.
@@ -380,7 +382,7 @@ def cycles_for_probability(probability, v50, criterion="ttp"):
 
 
 def johnson_range(critical_dimension, cycles, sample_spacing):
-    r"""Range at which a target spans ``cycles`` cycles at the sampling Nyquist limit. [m]
+    r"""Range at which a target spans ``cycles`` cycles at the sampling Nyquist limit [m].
 
     .. math:: R = \frac{d_c}{2\,N\,\delta}
 
