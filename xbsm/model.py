@@ -489,7 +489,7 @@ def target_acquisition(sensor: xr.Dataset, scenario: xr.Dataset, targets,
         P = \frac{(V/V_{50})^E}{1 + (V/V_{50})^E},\ E = 1.51 + 0.24\,V/V_{50}
 
     TTP is the geometric mean of its x and y integrals. The formulas, their sources
-    and their checks are in :doc:`target_acquisition`.
+    and their checks are in the documentation page target_acquisition.md.
     """
     check_inputs(sensor, scenario)
     targets = check_target_set("targets", targets)
