@@ -138,7 +138,7 @@ def noise_bandwidths(frequency, spacing, magnification, luminance):
     integrals run over one period of the sampled noise spectrum, as NVThermIP
     integrates to the sampling frequency. Quadrature: Q_f by 96-node Gauss-Legendre;
     Q_c in u = ln(xi' / xi), where B^2 = exp(-4.4 u^2) is a Gaussian of width 0.34, by
-    the trapezoidal rule on 241 nodes over |u| <= 3 (B^2 < 1e-17 beyond), which
+    the trapezoidal rule on 241 nodes over -3 <= u <= 3 (B^2 < 1e-17 beyond), which
     converges like Gauss-Hermite for the smooth rest of the integrand.
     """
     spacing = np.asarray(spacing, dtype=float)[..., None]
