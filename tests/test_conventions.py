@@ -79,6 +79,9 @@ EXPECTED_UNITS = MappingProxyType({
     "ner_target": "W m-2 sr-1", "nei": "W m-2", "mrtd": "K", "mtf": "1",
     "minimum_resolvable": "K", "mrc": "1", "noise_equivalent_contrast": "1",
     "reflectance_signal": "count",
+    # target acquisition
+    "probability": "1", "cycles_on_target": "1", "ttp": "cycles/rad",
+    "limiting_frequency": "cycles/rad", "ctf_system": "1", "displayed_target_size": "deg",
     # edge terms and GIQE
     "rer": "1", "rer_x": "1", "rer_y": "1", "eho": "1", "eho_x": "1", "eho_y": "1",
     "rer_giqe5": "1", "noise_gain": "1", "edge_response": "1",
@@ -309,6 +312,8 @@ def _model_cases():
         "mrtd": lambda: xbsm.mrtd(s, sc, frequency=[1e4, 1e5]),
         "mrc": lambda: xbsm.mrc(s, sc, frequency=[1e4, 1e5]),
         "system_otf": lambda: xbsm.system_otf(s, sc),
+        "target_acquisition": lambda: xbsm.target_acquisition(
+            s, sc, xbsm.radiometry.target_set(2.5, reflectance_contrast=0.5)),
         "reflectance_to_photoelectrons": lambda: reflectance_to_photoelectrons(s, sc),
     }
     for m in ("accurate", "fast", "pybsm"):
@@ -635,7 +640,7 @@ _TABLE_MODULES = ("xbsm.atmosphere.database", "xbsm.atmosphere.rules",
                   "xbsm.plot", "xbsm.plot._style", "xbsm.quadrature", "xbsm.radiometry",
                   "xbsm.units", "xbsm.study.goals",
                   "xbsm.metrics.edge", "xbsm.metrics.giqe", "xbsm.metrics.grd",
-                  "xbsm.metrics.acquisition",
+                  "xbsm.metrics.acquisition", "xbsm.metrics.eye", "xbsm.metrics.ttp",
                   *(f"xbsm.otf.{m}" for m in ("aperture", "defocus", "detector", "filters",
                                               "motion", "psf", "spectral", "system",
                                               "turbulence", "user", "wavefront")))

@@ -21,7 +21,7 @@ PAGES = ("index", "guide", "migration", "quirks", "flags", "api", "validation", 
 # Pages of the documentation site (docs/conf.py) besides the ones above; Sphinx itself
 # refuses (with -W) a page that no table of contents includes.
 SITE_PAGES = ("quickstart", "concepts", "stages", "geometry", "radiometry", "noise", "niirs",
-              "performance", "reference", "infrared")
+              "performance", "reference", "infrared", "target_acquisition")
 GALLERY = sorted((DOCS / "gallery").glob("plot_*.py"))
 ROOT = DOCS.parent
 
@@ -111,7 +111,8 @@ def test_guide_examples_run_in_order(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("page", ["migration", "flags", "validation", "quickstart", "concepts",
-                                  "geometry", "radiometry", "noise", "niirs", "infrared"])
+                                  "geometry", "radiometry", "noise", "niirs", "infrared",
+                                  "target_acquisition"])
 def test_examples_of_other_pages_run(page, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     namespace: dict = {"__name__": page}

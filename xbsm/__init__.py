@@ -43,6 +43,7 @@ _PUBLIC = {
     "niirs": "model",
     "snr": "model",
     "system_otf": "model",
+    "target_acquisition": "model",
     "simulate_image": "simulate",
 }
 

@@ -36,6 +36,7 @@ from .atmosphere import WAVELENGTH_ATTRS, band_atmosphere, band_atmosphere_array
 from .metrics import acquisition
 from .metrics import edge as edge_
 from .metrics import giqe as giqe_
+from .metrics import ttp as ttp_
 from .otf import system
 
 _OWN_DIMS = frozenset({"kernel_y", "kernel_x"}
@@ -296,6 +297,49 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, m, frequency, fy) -> xr
         sensor, scenario, frequency, spectral_weights=system.otf_weights(r["spectral_weights"]),
         integration_time=r["effective_integration_time"], slant_range=slant, method=m, fy=fy)
     return result({**out.data_vars, "flags": r["flags"]}, m)
+
+
+def target_acquisition(sensor: xr.Dataset, scenario: xr.Dataset, m, size, table, criterion,
+                       count: int, knobs: dict) -> xr.Dataset:
+    """:func:`xbsm.target_acquisition` on checked inputs (each target on the scenario).
+
+    The SNR chain of the targets (their single-frame contrast SNR), the pre-sample system
+    MTF on ``count`` frequencies up to the finest sampling frequency, then the observer
+    (:func:`xbsm.metrics.ttp.targeting`) and P(task) by ``criterion`` from ``table``.
+    """
+    ap = Labelled(sensor, scenario)
+    with ap.errors():
+        values, atm, _ = _snr_chain(ap, m, "scenario")
+        s, sc = ap.sensor, ap.scenario
+        spacing = ap.orientations(s["pixel_pitch_x"] / s["focal_length"],
+                                  s["pixel_pitch_y"] / s["focal_length"])
+        grid = np.linspace(0.0, 1.0 / float(spacing.min()), count + 1)[1:]
+        frequency = xr.DataArray(grid, dims="frequency", coords={"frequency": grid})
+        frequency["frequency"].attrs.update(units="cycles/rad", long_name="spatial frequency")
+        slant = geometry.slant_range(sc["ground_range"], sc["altitude"], form=m.geometry)
+        otf = system.system_components(
+            s, sc, frequency, spectral_weights=system.otf_weights(values["spectral_weights"]),
+            integration_time=values["effective_integration_time"], slant_range=slant,
+            method=m)
+        mtf = abs(otf["system_unfiltered"]).transpose(..., "orientation", "frequency")
+        mtf = mtf.assign_attrs(units="1", long_name="pre-sample system MTF")
+        terms = ttp_.targeting(frequency, mtf, spacing, values["snr_frame"], slant, size,
+                               **knobs)
+        cycles = terms.pop("johnson_cycles" if criterion == "johnson" else "ttp_cycles")
+        terms.pop("ttp_cycles", None)
+        terms.pop("johnson_cycles", None)
+        cycles = cycles.assign_attrs(ttp_.OUTPUTS["cycles_on_target"].attrs())
+        flags = values["flags"]
+        photopic = ttp_.eye_.PHOTOPIC_LUMINANCE
+        if not photopic[0] <= knobs["luminance"] <= photopic[1]:
+            flags = ap.flag(flags, "outside_acquisition_model", True)
+        out = {"probability": ttp_.probabilities(cycles, table, criterion),
+               "cycles_on_target": cycles, **terms, "mtf": mtf,
+               "slant_range": slant.assign_attrs(units="m", long_name="slant range"),
+               "snr_frame": values["snr_frame"], "flags": flags}
+        out["flags"] = out["flags"].astype(np.int32).assign_attrs(fl.flag_attrs())
+        return result(out, m, criterion=criterion,
+                      **{k: (v if isinstance(v, str) else float(v)) for k, v in knobs.items()})
 
 
 def reflectance_to_photoelectrons(sensor: xr.Dataset, scenario: xr.Dataset, m, reflectance,

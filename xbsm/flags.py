@@ -169,6 +169,11 @@ FLAGS = MappingProxyType({
         "interpolated in extinction (optical depth linear in 1/visibility, path radiances "
         "linear in the transmission lost) between the two bracketing visibility tables",
     ),
+    "outside_acquisition_model": (
+        268435456,
+        "an input of the target-acquisition model lies outside its stated range (display "
+        "luminance outside the photopic range of the eye models): P(task) is extrapolated",
+    ),
 })
 
 INVALID = ("beyond_database", "undersampled_grid", "snr_nonpositive", "rer_nonpositive",
@@ -185,8 +190,10 @@ CALIBRATION = (
     "q_out_of_range",
     "niirs_out_of_scale",
     "target_not_standard",
+    "outside_acquisition_model",
 )
-"""Bits saying a number is outside a GIQE's calibration (or off the NIIRS scale)."""
+"""Bits saying a number is outside a GIQE's calibration (or off the NIIRS scale), or
+outside the stated range of the target-acquisition model."""
 
 NOTICE = ("atmosphere_sparse", "well_fill_limited", "partial_spectral_coverage",
           "image_flat", "atmosphere_fallback", "visibility_interpolated")
@@ -196,7 +203,7 @@ INVALID_MASK = sum(FLAGS[name][0] for name in INVALID)
 """OR of the :data:`INVALID` bits (128834177)."""
 
 CALIBRATION_MASK = sum(FLAGS[name][0] for name in CALIBRATION)
-"""OR of the :data:`CALIBRATION` bits (4195704)."""
+"""OR of the :data:`CALIBRATION` bits (272631160)."""
 
 
 def flag(name: str) -> int:

@@ -375,3 +375,131 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, frequency=None, method=
     """
     check_inputs(sensor, scenario)
     return _chain.system_otf(sensor, scenario, method, frequency, fy)
+
+
+def _task_table(v50, criterion):
+    """The V50 (N50) of each task: a table by name, or a mapping of task -> value > 0."""
+    from .metrics import ttp
+    tables = ttp.JOHNSON_N50 if criterion == "johnson" else ttp.TTP_V50
+    if v50 is None:
+        v50 = next(iter(tables))
+    if isinstance(v50, str):
+        if v50 not in tables:
+            raise ValueError(f"v50 must name one of {sorted(tables)} for criterion "
+                             f"{criterion!r}, or map tasks to values; got {v50!r}")
+        return tables[v50]
+    if not hasattr(v50, "items") or not v50:
+        raise ValueError("v50 must be a table name or a mapping of task -> cycles; got "
+                         f"{type(v50).__name__}")
+    table = {}
+    for task, value in v50.items():
+        if task not in ttp.TASKS:
+            raise ValueError(f"v50 tasks must be among {ttp.TASKS}; got {task!r}")
+        table[task] = Spec("1", "cycles on target at P = 0.5", **POSITIVE).check(
+            f"v50[{task!r}]", value)
+    return table
+
+
+@contract(method=_METHOD, criterion=Choice(("ttp", "johnson")),
+          eye=Choice(("vollmerhausen", "barten")),
+          eyes=Spec("1", "eyes viewing", low=1, high=2, whole=True),
+          display_luminance=Spec("cd/m2", "mean display luminance", **POSITIVE),
+          displayed_contrast=Spec("1", "displayed target contrast", low=0.0, high=1.0,
+                                  low_open=True),
+          display_pixel_pitch=Spec("m", "display pixel pitch", **POSITIVE),
+          viewing_distance=Spec("m", "viewing distance", **POSITIVE),
+          eye_integration_time=Spec("s", "integration time of the eye", **POSITIVE),
+          frame_rate=Spec("Hz", "displayed frame rate", **POSITIVE),
+          noise_constant=Spec("Hz0.5", "eye noise calibration constant", **POSITIVE),
+          frequencies=Spec("1", "frequencies of the TTP grid", low=16, whole=True))
+def target_acquisition(sensor: xr.Dataset, scenario: xr.Dataset, targets,
+                       method="accurate", *, criterion="ttp", v50=None,
+                       eye="vollmerhausen", eyes=2, display_luminance=34.26,
+                       displayed_contrast=0.2, display_pixel_pitch=0.25e-3,
+                       viewing_distance=0.5, eye_integration_time=0.1, frame_rate=30.0,
+                       aliasing=True, noise_constant=169.6, frequencies=96):
+    r"""Probability of detecting, recognising and identifying targets (the TTP metric).
+
+    The observer of the US Army's target-acquisition models looking at a display of
+    the camera's image: the system contrast threshold function (the eye's CTF through
+    the system and display MTF, raised by the noise the eye sees, aliasing included),
+    the Targeting Task Performance metric, cycles on target and the probability of
+    each task (:mod:`xbsm.metrics.ttp`, :mod:`xbsm.metrics.eye`). Sweep
+    ``ground_range`` (or anything else) for P against range.
+
+    Parameters
+    ----------
+    sensor, scenario : xr.Dataset
+        From :func:`xbsm.sensor` and :func:`xbsm.scenario`; the scenario's background
+        is the targets' background.
+    targets : xr.Dataset
+        A target set (:func:`xbsm.radiometry.target_set`,
+        :func:`xbsm.radiometry.standard_targets`): size (characteristic dimension) and
+        thermal or reflectance contrast of each target, on dim ``target``.
+    method : str or Method
+        As for :func:`niirs`.
+    criterion : {"ttp", "johnson"}
+        Cycles on target by the TTP metric (default), or by the Johnson criteria (the
+        limiting frequency, the highest at which the target's contrast exceeds the
+        system threshold, times size over range).
+    v50 : str or mapping, optional
+        V50 (N50 for Johnson) per task: a table name of
+        :data:`xbsm.metrics.ttp.TTP_V50` / :data:`~xbsm.metrics.ttp.JOHNSON_N50`
+        (default the first) or a mapping such as ``{"identify": 20.0}``, each value in
+        (0, inf). [1]
+    eye : {"vollmerhausen", "barten"}
+        The eye model (:data:`xbsm.metrics.eye.EYE_MODELS`).
+    eyes : int
+        1 or 2 eyes viewing.
+    display_luminance : float
+        Mean display luminance, in (0, inf); default 34.26 cd/m^2 (10 fL). Outside the
+        photopic range [3, 1e4] sets ``outside_acquisition_model``. [cd/m^2]
+    displayed_contrast : float
+        Contrast of the target on the display, in (0, 1]: the display's gain puts the
+        target-background difference at this contrast (as NV-IPM's gain and level with
+        a desired contrast); default 0.2. [1]
+    display_pixel_pitch, viewing_distance : float
+        One sensor sample per display pixel of this pitch, seen from this distance: the
+        magnification is (pitch / distance) / (pixel pitch / focal length). [m]
+    eye_integration_time, frame_rate : float
+        The eye's integration time [s] (0.1) and the frame rate [Hz] (30).
+    aliasing : bool
+        Treat the aliased signal of the sampled imager as noise (default True).
+    noise_constant : float
+        The eye's noise calibration constant alpha, in (0, inf); default 169.6. [Hz^0.5]
+    frequencies : int
+        Points of the frequency grid, up to the sampling frequency 1 / (pitch / focal
+        length), at least 16; default 96. [1]
+
+    Returns
+    -------
+    xr.Dataset
+        ``probability`` over ``task`` (detect, recognize, identify) and every sweep dim;
+        ``cycles_on_target``, ``ttp`` and ``limiting_frequency`` [cycles/rad],
+        ``ctf_system`` and ``mtf`` (pre-sample system MTF) over ``orientation`` and
+        ``frequency``, ``displayed_target_size`` [deg], ``slant_range`` [m],
+        ``snr_frame``, ``flags``. The observer's knobs are attributes.
+
+    Notes
+    -----
+    .. math::
+
+        \mathrm{TTP} = \int_{C > \mathrm{CTF_{sys}}}\sqrt{C / \mathrm{CTF_{sys}}(\xi)}\,
+        d\xi,\quad V = \mathrm{TTP}\,\sqrt{A} / R,\quad
+        P = \frac{(V/V_{50})^E}{1 + (V/V_{50})^E},\ E = 1.51 + 0.24\,V/V_{50}
+
+    TTP is the geometric mean of its x and y integrals. The formulas, their sources
+    and their checks are in the documentation page target_acquisition.md.
+    """
+    check_inputs(sensor, scenario)
+    targets = check_target_set("targets", targets)
+    table = _task_table(v50, criterion)
+    scenario = targets_on_scenario(scenario, targets)
+    check_inputs(sensor, scenario)
+    knobs = {"display_pixel_angle": display_pixel_pitch / viewing_distance,
+             "luminance": float(display_luminance), "contrast": float(displayed_contrast),
+             "eye": eye, "eyes": int(eyes), "noise_constant": float(noise_constant),
+             "eye_integration_time": float(eye_integration_time),
+             "frame_rate": float(frame_rate), "aliasing": bool(aliasing)}
+    return _chain.target_acquisition(sensor, scenario, method, targets[
+        "characteristic_dimension"], table, criterion, int(frequencies), knobs)

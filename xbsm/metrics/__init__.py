@@ -10,6 +10,9 @@ The stages follow the data flow, each in its own module:
   calibration ranges, the validity flags and the sampling ratio Q.
 - :mod:`xbsm.metrics.acquisition`: the four-bar minimum resolvable temperature
   difference from a NETD and an MTF (target-acquisition figures of merit).
+- :mod:`xbsm.metrics.eye` and :mod:`xbsm.metrics.ttp`: the observer (eye contrast
+  threshold, display, noise) and the Targeting Task Performance metric with P(task),
+  behind :func:`xbsm.target_acquisition`.
 - :mod:`xbsm.metrics.pybsm_numerics`: NumPy's interpolation search, copied so
   that ``method="pybsm"`` reproduces pyBSM 0.16.1 bit for bit.
 

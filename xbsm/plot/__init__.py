@@ -7,7 +7,10 @@ call.
 
 :func:`against_range`, :func:`noise_breakdown`, :func:`mtf_breakdown` and
 :func:`range_performance` (:mod:`xbsm.plot.axes`) draw one panel on a
-matplotlib Axes (a new pyplot one if none is given) for use in a notebook.
+matplotlib Axes (a new pyplot one if none is given) for use in a notebook;
+:func:`probability_against_range` (:mod:`xbsm.plot.acquisition`) the probability of
+detection, recognition and identification against range of
+:func:`xbsm.target_acquisition`.
 
 Validity flags are drawn, never hidden: a value outside the GIQE calibration
 (:func:`xbsm.flags.is_outside_calibration`) is drawn dashed, a value that is
@@ -33,9 +36,11 @@ from ._style import (
     NOISE_TERMS,
     SNR_FLOOR,
 )
+from .acquisition import probability_against_range
 from .axes import against_range, mtf_breakdown, noise_breakdown, range_performance
 from .figures import standard_figures
 
 __all__ = ["DPI", "MAX_PANELS", "MTF_COMPONENTS", "MTF_POINT", "MTF_RANGES", "NIIRS_SCALE",
            "NOISE_POINT", "NOISE_TERMS", "SNR_FLOOR", "against_range", "mtf_breakdown",
-           "noise_breakdown", "range_performance", "standard_figures"]
+           "noise_breakdown", "probability_against_range", "range_performance",
+           "standard_figures"]
