@@ -194,3 +194,48 @@ def test_integer_images_are_counted_once_to_the_same_percentiles(dtype):
     stat, _ = _stats(values, strip=10_000)
     p1, p2 = np.nanpercentile(values.astype(float), (0.2, 99.8))  # numpy on floats
     assert stat[0] == p1 and stat[1] == (0.95 - 0.05) / (p2 - p1)
+
+
+def test_a_list_of_mixed_sizes_keeps_one_kernel_per_sampling_and_warns_once():
+    """Item 5 of issue 26: mixed sizes and channel counts in one run; a camera finer than
+    some references is one warning for the run and a flag on each such image."""
+    from xbsm.simulate import simulate_images
+
+    rgb = np.stack([scene(90, 120), scene(90, 120, seed=3), scene(90, 120, seed=4)], axis=-1)
+    images = [scene(80, 80), scene(120, 96), rgb, scene(100, 70), scene(300, 260)]
+    # 20 mm reference pixels are coarser than the camera's (about 12 mm at 4 km): upsampled
+    gsds = [GSD, GSD, GSD, 0.02, GSD]
+    with pytest.warns(UserWarning, match=r"1 of 5 images \(indices 3\) are more finely "
+                      r"sampled") as record:
+        out = simulate_images(images, SENSOR, SCENARIO, gsd=gsds, seed=9, noise=False,
+                              tile_size=256)
+    assert sum("more finely sampled" in str(w.message) for w in record) == 1
+    assert [bool(fl.has_flag(r.flags, "upsampled").any()) for r in out] == [
+        False, False, False, True, False]
+    assert "band" in out[2].reflectance.dims and out[2].counts.shape[-1] > 0
+    # one kernel per optical state and reference sampling: the same GSD gives the same
+    # kernel whatever the image's size (up to the aliasing of its far wings on each
+    # image's own Fourier grid: 2.3e-6 of the peak measured here), the coarser reference
+    # a narrower one in reference pixels
+    same = [r.psf.isel(ground_range=0) for r in out[:3]]
+    for other in same[1:]:
+        half = min(other.sizes["psf_x"], same[0].sizes["psf_x"]) // 2
+        a, b = (k.sel(psf_y=slice(-half, half), psf_x=slice(-half, half)) for k in
+                (same[0], other))
+        assert float(np.abs(a - b).max()) < 1e-5 * float(a.max())
+    assert out[3].psf.sizes["psf_x"] < out[0].psf.sizes["psf_x"]
+    # each image's seed is recorded and regenerates it alone
+    alone = xbsm.simulate_image(images[1], SENSOR, SCENARIO, gsd=GSD, noise=False,
+                                seed=int(out[1].attrs["seed"]))
+    assert np.array_equal(alone.counts, out[1].counts, equal_nan=True)
+
+
+def test_a_list_names_the_image_that_cannot_fit(monkeypatch):
+    from xbsm.simulate import simulate_images
+
+    monkeypatch.setattr(tiles, "available_memory", lambda: 1 << 20)
+    named = xr.DataArray(scene(), dims=("y", "x"), name="harbour.png")
+    with pytest.raises(MemoryError, match=r"image '#0' \(80 x 80"):
+        simulate_images([scene(80, 80), named], SENSOR, SCENARIO, gsd=GSD)
+    with pytest.raises(MemoryError, match=r"image 'harbour.png' \(300 x 260"):
+        simulate_images([named], SENSOR, SCENARIO, gsd=GSD)

@@ -40,10 +40,10 @@ from .tiles import (
     tile_reflectance,
     tile_statistics,
     tiled_blur_and_resample,
-    tiled_kernel,
+    tiled_psf,
 )
 
-__all__ = ["simulate_image"]
+__all__ = ["simulate_image", "simulate_images"]
 
 CHANNEL_DIMS = ("band", "channel", "colour", "color")
 """Dimension names taken as an image's colour channel (percentiles span every channel)."""
@@ -252,7 +252,7 @@ def _tiled_camera_image(img, stats, optics: Optics, samp, shape, im: ImageMethod
     half, small = kernel_half_width(optics, angle, shape)
     halo = min(TILE_HALO_FACTOR * half, max(shape))
     core = (tile_core(taps, "y", shape[0], tile_size), tile_core(taps, "x", shape[1], tile_size))
-    psf, spectrum = tiled_kernel(optics, angle, halo, *core)
+    psf, spectrum = tiled_psf(optics, angle, halo, *core)
     out = tiled_blur_and_resample(img, stats, spectrum, taps, halo, core, mapping,
                                   reflectance_range)
     flags = fl.set_flag(fl.empty_flags(), "image_small", small)
@@ -433,6 +433,18 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         (radiometry, ``upsampled`` with one warning per call, ``image_small``,
         ``image_nonfinite``, ``image_flat``, ``reference_unresolved``).
     """
+    return _simulate(image, sensor, scenario, gsd=gsd, seed=seed, noise=noise, method=method,
+                     components=components, reflectance=reflectance,
+                     reflectance_range=reflectance_range, convolution=convolution,
+                     resampling=resampling, basis=basis, defocus_radius=defocus_radius,
+                     channel_dim=channel_dim, outputs=outputs, counts_dtype=counts_dtype,
+                     tile_size=tile_size, warn=True)
+
+
+def _simulate(image, sensor, scenario, *, gsd, seed, noise, method, components, reflectance,
+              reflectance_range, convolution, resampling, basis, defocus_radius, channel_dim,
+              outputs, counts_dtype, tile_size, warn):
+    """:func:`simulate_image`; ``warn``: the ``upsampled`` warning (off: the caller's)."""
     check_inputs(sensor, scenario)
     tile_size = TILE_SIZE if tile_size is None else tile_size
     if isinstance(tile_size, bool) or not isinstance(tile_size, int | np.integer) \
@@ -489,7 +501,8 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         blurred, noisy = (camera.digital_filter(a, sensor["filter_kernel"], samp["size_y"],
                                                 samp["size_x"]) for a in (blurred, noisy))
     flags = radiometry["flags"] | samp["flags"] | psf_flags | mapped["flags"]
-    _warn_upsampled(samp)
+    if warn:
+        _warn_upsampled(samp)
     counts = camera.digitize(noisy, sensor, im.quantization)
     if counts_dtype is not None:
         counts = _integer_counts(counts, counts_dtype, fill)
@@ -498,3 +511,87 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         "seed": str(entropy), "noise": "on" if noise else "off",
         "components": " ".join(comps), "reference_gsd": str(gsd),
         **({"alpha": "dropped"} if alpha else {})})
+
+
+def _image_seed(entropy: int, index: int) -> int:
+    """The seed of image ``index`` of a list: spawned from the run's seed and its position."""
+    words = np.random.SeedSequence(entropy, spawn_key=(index,)).generate_state(2, np.uint32)
+    return int(words[0]) << 32 | int(words[1])
+
+
+def _as_list_item(item, index: int):
+    """One image of a list as a DataArray named by its name or its index (for messages)."""
+    if isinstance(item, xr.DataArray):
+        return item if item.name is not None else item.rename(f"#{index}")
+    array = np.asarray(item)
+    dims = ("y", "x") if array.ndim == 2 else ("y", "x", "band")
+    if array.ndim == 3 and array.shape[-1] == 4:  # RGBA: the alpha channel labelled, dropped
+        return xr.DataArray(array, dims=dims, name=f"#{index}",
+                            coords={"band": ["R", "G", "B", "A"]})
+    if array.ndim not in (2, 3):
+        raise ValueError(f"images[{index}] must be 2-D (rows, columns) or 3-D (rows, columns, "
+                         f"3 or 4 channels); got shape {array.shape}")
+    return xr.DataArray(array, dims=dims, name=f"#{index}")
+
+
+def simulate_images(images, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd, seed=None,
+                    **kwargs) -> list:
+    """A list of reference images of any sizes and channel counts, one run of the camera.
+
+    Each image is simulated on its own sampling, as :func:`simulate_image` does (its own
+    blur: one kernel per distinct optical state and reference sampling, never one image's
+    kernel reused for another's sampling); a camera that samples finer than a reference
+    is flagged ``upsampled`` on each such image and warned about once for the whole list.
+
+    Parameters
+    ----------
+    images : sequence of np.ndarray or xr.DataArray
+        Reference images, each as :func:`simulate_image` takes one; a DataArray's name
+        (else ``#index``) names it in messages.
+    sensor, scenario : xr.Dataset
+        As for :func:`simulate_image`.
+    gsd : float or sequence of float
+        Reference GSD, one for all or one per image. [m]
+    seed : int, optional
+        The run's seed; image ``i`` gets a seed spawned from it and ``i`` (recorded in its
+        result's ``seed`` attribute, so any image can be regenerated alone). ``None``:
+        fresh entropy.
+    **kwargs
+        Any other keyword of :func:`simulate_image`.
+
+    Returns
+    -------
+    list of xr.Dataset
+        One :func:`simulate_image` result per image, in order.
+    """
+    images = list(images)
+    gsds = [gsd] * len(images) if np.ndim(gsd) == 0 else list(gsd)
+    if len(gsds) != len(images):
+        raise ValueError(f"gsd must be one value or one per image ({len(images)}); got "
+                         f"{len(gsds)}")
+    entropy = camera.seed_entropy(seed)
+    options = dict(noise=True, method="accurate", components=None, reflectance=None,
+                   reflectance_range=(0.05, 0.95), convolution=None, resampling=None,
+                   basis=None, defocus_radius=None, channel_dim=None, outputs=None,
+                   counts_dtype=None, tile_size=None)
+    unknown = sorted(set(kwargs) - set(options))
+    if unknown:
+        raise ValueError(f"simulate_images got unknown keywords {unknown}; it takes those of "
+                         "simulate_image")
+    options.update(kwargs)
+    options["outputs"] = Selection(IMAGE_OUTPUTS).check("outputs", options["outputs"])
+    results = [
+        _simulate(_as_list_item(item, i), sensor, scenario, gsd=g,
+                  seed=_image_seed(entropy, i), warn=False, **options)
+        for i, (item, g) in enumerate(zip(images, gsds, strict=True))]
+    upsampled = [i for i, r in enumerate(results)
+                 if bool(fl.has_flag(r["flags"], "upsampled").any())]
+    if upsampled:
+        shown = ", ".join(str(i) for i in upsampled[:10]) + (", ..." if len(upsampled) > 10
+                                                              else "")
+        warnings.warn(
+            f"{len(upsampled)} of {len(results)} images (indices {shown}) are more finely "
+            "sampled by the camera than by their reference (flag 'upsampled'): the camera "
+            "is better than the reference, so they lack detail it would record",
+            UserWarning, stacklevel=2)
+    return results

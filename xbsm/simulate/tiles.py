@@ -52,7 +52,7 @@ from .reflectance import PERCENTILES
 from .resample import apply_taps, reflect_index
 
 __all__ = ["TILE_HALO_FACTOR", "TILE_SIZE", "available_memory", "check_memory", "tile_core",
-           "tile_reflectance", "tile_statistics", "tiled_blur_and_resample", "tiled_kernel"]
+           "tile_reflectance", "tile_statistics", "tiled_blur_and_resample", "tiled_psf"]
 
 TILE_SIZE = 2048
 """Default ``simulate_image(tile_size=)``: reference pixels per side of a tile's core."""
@@ -379,7 +379,7 @@ def tile_core(taps, axis, size, tile):
     return int(min(max(tile, span), size))
 
 
-def tiled_kernel(optics, angle, halo: int, core_y: int, core_x: int):
+def tiled_psf(optics, angle, halo: int, core_y: int, core_x: int):
     """The truncated blur kernel of the tiles and its spectrum on one tile's FFT grid.
 
     Parameters
@@ -459,7 +459,7 @@ def tiled_blur_and_resample(image: xr.DataArray, statistics: xr.DataArray, spect
     statistics : xr.DataArray
         From :func:`tile_statistics`.
     spectrum : xr.DataArray
-        From :func:`tiled_kernel`.
+        From :func:`tiled_psf`.
     taps : xr.Dataset
         From :func:`xbsm.simulate.resample.resampling_taps`.
     halo : int
