@@ -2,7 +2,8 @@
 
 Three measurements, each call in a child process of its own so that its peak
 resident memory (``resource.getrusage(RUSAGE_SELF).ru_maxrss``, which includes the
-Python interpreter, the imports and the input image) is that call's alone:
+Python interpreter, the imports and the input image: recorded before the call as
+``baseline_rss``) is that call's alone:
 
 1. a 12-megapixel image (3000 x 4000, ``uint8``) eagerly and through the lazy
    path (a dask-backed stack of one image, ``.compute()``);
@@ -19,7 +20,8 @@ a synthetic scene (gradient, slanted edge, bars, squares) with noise, seed 0.
 
 ``--before PATH`` runs the same children on another checkout (e.g. the commit
 before the tiles, ``git worktree add /tmp/xbsm-before cf2fa1d``) and records both;
-``--skip-before-12k`` leaves out the untiled 12,000 x 12,000 run (about 7 GB).
+``--after PATH`` measures a frozen copy of this checkout's HEAD instead of the
+work tree; ``--skip-before-12k`` leaves out the untiled 12,000 x 12,000 run (about 7 GB).
 The 1-minute load average is read before and after each child. Writes
 ``docs/benchmarks/simulate_large.json`` (or ``--out``); ``docs/simulate.md`` quotes it.
 
@@ -51,13 +53,20 @@ import xarray as xr
 import xbsm
 
 rows, cols, mode, repeats = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], int(sys.argv[4])
-y, x = np.mgrid[0:rows, 0:cols].astype(np.float32)
-img = 40.0 + 0.3 * x * (512 / cols) + 0.1 * y * (512 / rows)
-img += 90.0 * ((x - 0.55 * cols) * np.cos(0.087) + (y - 0.5 * rows) * np.sin(0.087) > 0)
-img += 30.0 * (np.sin(2 * np.pi * x / 16.0) > 0) * (y < 0.2 * rows)
-img += np.random.default_rng(0).normal(0.0, 4.0, img.shape).astype(np.float32)
-img = np.clip(img, 0, 255).astype(np.uint8)
-del y, x
+# the scene, built in strips of rows so that making it costs no more than the image
+img = np.empty((rows, cols), np.uint8)
+rng = np.random.default_rng(0)
+x = np.arange(cols, dtype=np.float32)
+step = max(1, (1 << 22) // cols)
+for start in range(0, rows, step):
+    y = np.arange(start, min(rows, start + step), dtype=np.float32)[:, None]
+    part = 40.0 + 0.3 * x * (512 / cols) + 0.1 * y * (512 / rows)
+    edge = (x - 0.55 * cols) * np.cos(0.087) + (y - 0.5 * rows) * np.sin(0.087)
+    part = part + 90.0 * (edge > 0)
+    part = part + 30.0 * (np.sin(2 * np.pi * x / 16.0) > 0) * (y < 0.2 * rows)
+    part = part + rng.normal(0.0, 4.0, part.shape).astype(np.float32)
+    img[start: start + step] = np.clip(part, 0, 255).astype(np.uint8)
+del part
 sensor = xbsm.sensor(aperture_diameter=0.2, focal_length=4.0, pixel_pitch_x=10e-6,
                      wavelength_min=0.45e-6, wavelength_max=0.7e-6, integration_time=0.004,
                      read_noise=20.0, max_well=60000.0, bit_depth=12.0)
@@ -68,6 +77,7 @@ if mode == "counts":
 image = xr.DataArray(img, dims=("y", "x"), name="scene")
 if mode == "lazy":
     image = image.expand_dims(image=1).chunk({"image": 1})
+baseline = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # imports + the scene
 times = []
 for _ in range(repeats):
     start = time.perf_counter()
@@ -78,8 +88,8 @@ for _ in range(repeats):
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 print(json.dumps({"rows": rows, "cols": cols, "mode": mode, "seconds": times,
                   "median_seconds": statistics.median(times[1:] or times),
-                  "peak_rss_bytes": peak, "counts_shape": list(counts.shape),
-                  "counts_sum": float(np.nansum(counts))}))
+                  "peak_rss_bytes": peak, "baseline_rss_bytes": baseline,
+                  "counts_shape": list(counts.shape), "counts_sum": float(np.nansum(counts))}))
 '''
 
 
@@ -97,9 +107,11 @@ def run(checkout: Path, rows: int, cols: int, mode: str, repeats: int) -> dict:
                 (proc.stderr.strip().splitlines() or ["?"])[-1], "load_1min": [before, load()]}
     out = json.loads(proc.stdout.strip().splitlines()[-1])
     out["peak_rss_gib"] = round(out["peak_rss_bytes"] / 2**30, 3)
+    out["baseline_rss_gib"] = round(out["baseline_rss_bytes"] / 2**30, 3)
     out["load_1min"] = [before, load()]
     print(f"{checkout.name:>16} {rows:>6} x {cols:<6} {mode:>6}: "
-          f"{out['median_seconds']:8.3f} s  peak RSS {out['peak_rss_gib']:.2f} GiB  "
+          f"{out['median_seconds']:8.3f} s  peak RSS {out['peak_rss_gib']:.2f} GiB "
+          f"(before the call {out['baseline_rss_gib']:.2f})  "
           f"load {out['load_1min']}", flush=True)
     return out
 
@@ -107,11 +119,14 @@ def run(checkout: Path, rows: int, cols: int, mode: str, repeats: int) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--before", type=Path, help="a checkout to compare with")
+    parser.add_argument("--after", type=Path, default=ROOT,
+                        help="the checkout measured (default this one; a frozen copy of its "
+                        "HEAD, `git archive HEAD xbsm`, keeps edits out of a long run)")
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--skip-before-12k", action="store_true")
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
-    sides = {"after": ROOT, **({"before": args.before} if args.before else {})}
+    sides = {"after": args.after, **({"before": args.before} if args.before else {})}
     result = {"machine": machine(), "commit": commit(), "runs": {}}
     if args.before:
         result["before_commit"] = commit(args.before)

@@ -239,3 +239,13 @@ def test_a_list_names_the_image_that_cannot_fit(monkeypatch):
         simulate_images([scene(80, 80), named], SENSOR, SCENARIO, gsd=GSD)
     with pytest.raises(MemoryError, match=r"image 'harbour.png' \(300 x 260"):
         simulate_images([named], SENSOR, SCENARIO, gsd=GSD)
+
+
+def test_a_tiled_rgb_stack_maps_all_channels_together_as_untiled():
+    rng = np.random.default_rng(0)
+    img = xr.DataArray(rng.integers(0, 256, (2, 150, 170, 3)).astype(np.uint8),
+                       dims=("image", "y", "x", "band"))
+    whole, part = simulate(img, noise=False), simulate(img, noise=False, tile_size=64)
+    assert part.blurred.dims == whole.blurred.dims
+    assert np.array_equal(part.reflectance, whole.reflectance)
+    assert float(np.abs(part.blurred - whole.blurred).max() / np.abs(whole.blurred).max()) < 4e-3

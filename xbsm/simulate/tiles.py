@@ -371,12 +371,17 @@ def tile_core(taps, axis, size, tile):
     Returns
     -------
     int
-        Reference pixels per tile along the axis, without the overlap. [pixels]
+        Reference pixels per tile along the axis, without the overlap: the image split
+        into ``ceil(size / tile)`` equal tiles, each widened by two tap spans (at most
+        ``tile``). [pixels]
     """
     index, weight = taps[f"index_{axis}"].values, taps[f"weight_{axis}"].values
     valid = np.isfinite(weight[..., 0])
-    span = np.where(valid, index.max(-1) - index.min(-1) + 1, 1).max()
-    return int(min(max(tile, span), size))
+    span = int(np.where(valid, index.max(-1) - index.min(-1) + 1, 1).max())
+    # as many tiles as ``tile`` needs, of equal size (plus a tap span for the greedy
+    # blocking), not full tiles and a thin last one: smaller FFTs
+    count = -(-size // tile)
+    return int(min(max(-(-size // count) + 2 * span, span), size, max(tile, span)))
 
 
 def tiled_psf(optics, angle, halo: int, core_y: int, core_x: int):
