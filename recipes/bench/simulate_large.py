@@ -20,7 +20,9 @@ a synthetic scene (gradient, slanted edge, bars, squares) with noise, seed 0.
 
 ``--before PATH`` runs the same children on another checkout (e.g. the commit
 before the tiles, ``git worktree add /tmp/xbsm-before cf2fa1d``) and records both;
-``--after PATH`` measures a frozen copy of this checkout's HEAD instead of the
+``--interleaved ROUNDS`` times only the 256 and 512 pixel images, alternating the
+two checkouts, and adds the medians to the JSON (a fair before/after on a shared
+machine). ``--after PATH`` measures a frozen copy of this checkout's HEAD instead of the
 work tree; ``--skip-before-12k`` leaves out the untiled 12,000 x 12,000 run (about 7 GB).
 The 1-minute load average is read before and after each child. Writes
 ``docs/benchmarks/simulate_large.json`` (or ``--out``); ``docs/simulate.md`` quotes it.
@@ -35,6 +37,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import sys
 from pathlib import Path
@@ -116,6 +119,26 @@ def run(checkout: Path, rows: int, cols: int, mode: str, repeats: int) -> dict:
     return out
 
 
+def interleaved(args) -> None:
+    """Per-image time at 256 and 512 pixels, before and after in alternation."""
+    sides = {"after": args.after, "before": args.before}
+    times = {side: {str(n): [] for n in (256, 512)} for side in sides}
+    for _ in range(args.interleaved):
+        for n in (256, 512):
+            for side, checkout in sides.items():
+                times[side][str(n)].append(run(checkout, n, n, "eager", args.repeats)
+                                           ["median_seconds"])
+    result = json.loads(args.out.read_text()) if args.out.exists() else {}
+    result["throughput_interleaved"] = {
+        "rounds": args.interleaved, "repeats_per_child": args.repeats, "median_seconds": {
+            side: {n: statistics.median(v) for n, v in by.items()} for side, by in times.items()},
+        "every_child_median_seconds": times}
+    args.out.write_text(json.dumps(result, indent=1) + "\n")
+    for n in ("256", "512"):
+        after, before = (statistics.median(times[s][n]) for s in ("after", "before"))
+        print(f"{n} px: after {after:.3f} s, before {before:.3f} s, ratio {after / before:.3f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--before", type=Path, help="a checkout to compare with")
@@ -125,7 +148,13 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--skip-before-12k", action="store_true")
     parser.add_argument("--out", type=Path, default=OUT)
+    parser.add_argument("--interleaved", type=int, default=0, metavar="ROUNDS",
+                        help="only the 256 and 512 pixel timings, alternating the two "
+                        "checkouts ROUNDS times (the same load for both), added to --out")
     args = parser.parse_args()
+    if args.interleaved:
+        interleaved(args)
+        return
     sides = {"after": args.after, **({"before": args.before} if args.before else {})}
     result = {"machine": machine(), "commit": commit(), "runs": {}}
     if args.before:
