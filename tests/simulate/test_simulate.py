@@ -761,7 +761,7 @@ def test_sampling_is_the_curved_earth_geometry_of_niirs():
 def test_api_page_lists_every_public_function_of_the_simulate_package():
     api = (DOCS / "api.md").read_text()
     for module in ("image", "reflectance", "photoelectrons", "sampling", "psf", "pybsm_psf",
-                   "convolve", "resample", "camera", "inverse", "labels", "options"):
+                   "convolve", "resample", "camera", "inverse", "labels", "options", "tiles"):
         mod = importlib.import_module(f"xbsm.simulate.{module}")
         assert f"`xbsm.simulate.{module}`" in api, module
         for name, func in inspect.getmembers(mod, inspect.isfunction):

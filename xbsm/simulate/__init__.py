@@ -13,7 +13,7 @@ reflectance), :mod:`~xbsm.simulate.photoelectrons` (the radiometry),
 
 from .camera import add_noise, digital_filter, digitize
 from .convolve import blur
-from .image import simulate_image
+from .image import simulate_image, simulate_images
 from .inverse import (
     photoelectrons_to_pixels,
     photoelectrons_to_reflectance,
@@ -42,6 +42,7 @@ __all__ = [
     "resample",
     "resampling_taps",
     "simulate_image",
+    "simulate_images",
     "stretch_contrast_8bit",
     "transform_boxes",
     "transform_points",

@@ -23,6 +23,9 @@ from ._arrays import align_leading
 
 __all__ = ["add_noise", "digital_filter", "digitize", "seed_entropy"]
 
+_STRIP = 1 << 20
+"""Pixels per strip of the noise draws (their temporaries are strip-sized)."""
+
 
 def seed_entropy(seed) -> int:
     """The entropy of a seed: a non-negative whole number, or fresh entropy for ``None``."""
@@ -43,12 +46,18 @@ def _noise_kernel(mean, sigma, ids, entropy):
     for index in np.ndindex(lead):
         rng = np.random.default_rng(np.random.SeedSequence(entropy,
                                                            spawn_key=(int(ids[index]),)))
-        lam = mean[index]
-        valid = np.isfinite(lam)
-        rate = np.where(valid, np.maximum(lam, 0.0), 0.0)
-        draw = rng.poisson(rate) + np.minimum(np.where(valid, lam, 0.0), 0.0)
-        draw = draw + rng.normal(0.0, float(sigma[index]), lam.shape)
-        out[index] = np.where(valid, draw, np.nan)
+        lam, draw = mean[index], out[index]
+        # in strips of rows: the generator's stream is sequential, so the draws are those
+        # of one call over the whole image (all Poisson, then all normal), to the bit
+        rows = max(1, _STRIP // max(1, lam.shape[-1]))
+        strips = [slice(start, start + rows) for start in range(0, lam.shape[-2], rows)]
+        for part in strips:
+            valid = np.isfinite(lam[part])
+            rate = np.where(valid, np.maximum(lam[part], 0.0), 0.0)
+            draw[part] = rng.poisson(rate) + np.minimum(np.where(valid, lam[part], 0.0), 0.0)
+        for part in strips:
+            noisy = draw[part] + rng.normal(0.0, float(sigma[index]), lam[part].shape)
+            draw[part] = np.where(np.isfinite(lam[part]), noisy, np.nan)
     return out
 
 

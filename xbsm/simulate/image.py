@@ -11,6 +11,7 @@ scenario cell, and dask-backed images stay lazy.
 
 from __future__ import annotations
 
+import math
 import warnings
 
 import numpy as np
@@ -31,8 +32,18 @@ from .pybsm_psf import pybsm_psf
 from .reflectance import image_to_reflectance
 from .resample import blur_and_resample, resample, resampling_taps
 from .sampling import sampling
+from .tiles import (
+    TILE_HALO_FACTOR,
+    TILE_SIZE,
+    check_memory,
+    tile_core,
+    tile_reflectance,
+    tile_statistics,
+    tiled_blur_and_resample,
+    tiled_psf,
+)
 
-__all__ = ["simulate_image"]
+__all__ = ["simulate_image", "simulate_images"]
 
 CHANNEL_DIMS = ("band", "channel", "colour", "color")
 """Dimension names taken as an image's colour channel (percentiles span every channel)."""
@@ -133,7 +144,7 @@ def _as_image(image, channel_dim):
     elif channel_dim not in image.dims:
         raise ValueError(f"channel_dim {channel_dim!r} is not a dim of the image {image.dims}")
     image, labelled_alpha = _drop_alpha(image, channel_dim)
-    image = image.rename(y="y_input", x="x_input").astype(float)
+    image = image.rename(y="y_input", x="x_input")  # cast to float tile by tile, or once
     return (image.drop_vars([c for c in image.coords if c in INPUT_DIMS]), channel_dim,
             alpha or labelled_alpha)
 
@@ -227,6 +238,66 @@ def _camera_image(images: dict, optics: Optics, samp, gsd, shape, im: ImageMetho
     return out, psf, flags
 
 
+def _tiled(shape, tile_size, im: ImageMethod) -> bool:
+    """Whether the image goes through the tiled path (larger than a tile, accurate knobs)."""
+    return (max(shape) > tile_size and im.psf == "exact" and im.convolution == "fft"
+            and im.resampling in ("cubic", "area", "none"))
+
+
+def _tiled_camera_image(img, stats, optics: Optics, samp, shape, im: ImageMethod, tile_size,
+                        mapping, reflectance_range):
+    """The blurred reflectance on the camera's pixels by tiles, the kernel and the flags."""
+    angle = samp["reference_angle"]
+    taps = resampling_taps(samp, shape, im.resampling)
+    half, small = kernel_half_width(optics, angle, shape)
+    halo = min(TILE_HALO_FACTOR * half, max(shape))
+    core = (tile_core(taps, "y", shape[0], tile_size), tile_core(taps, "x", shape[1], tile_size))
+    psf, spectrum = tiled_psf(optics, angle, halo, *core)
+    out = tiled_blur_and_resample(img, stats, spectrum, taps, halo, core, mapping,
+                                  reflectance_range)
+    flags = fl.set_flag(fl.empty_flags(), "image_small", small)
+    flags = fl.set_flag(flags, "reference_unresolved", nyquist_otf(optics, angle) > 0.05)
+    return out, psf, flags
+
+
+def _image_name(image) -> str:
+    """How the memory guard names an image: its name, and how many a stack holds."""
+    name = repr(image.name) if isinstance(image, xr.DataArray) and image.name is not None \
+        else "(unnamed)"
+    return name
+
+
+def _memory_needed(img, samp, outputs, counts_dtype, tiled, tile_size) -> int:
+    """Estimated peak bytes of a simulation, before anything image-sized is allocated.
+
+    Held: the requested outputs (and, for a dask-backed image, one chunk of the input,
+    loaded); working: the untiled path's whole-image arrays (a float copy, the
+    percentile mapping's copies, the padded spectrum, the OTF grid) or the tiled path's
+    few tile-sized arrays. Output-sized intermediates: about four per output image.
+    """
+    ny, nx = img.sizes["y_input"], img.sizes["x_input"]
+    pixels = ny * nx
+    others = [d for d in img.dims if d not in INPUT_DIMS]
+    if img.chunks is not None:
+        n_img = math.prod(max(img.chunksizes[d]) for d in others)
+        held = pixels * n_img * img.dtype.itemsize
+    else:
+        n_img, held = math.prod(img.sizes[d] for d in others), 0
+    cells = samp["size_y"].size
+    out_px = int(samp["size_y"].max()) * int(samp["size_x"].max()) * n_img * cells
+    chosen = IMAGE_OUTPUTS if outputs is None else outputs
+    held += 8 * pixels * n_img * (("reflectance" in chosen) + cells * ("ideal" in chosen))
+    held += 8 * out_px * (("blurred" in chosen) + ("noisy" in chosen) + 4)
+    held += out_px * (8 if counts_dtype is None else np.dtype(counts_dtype).itemsize)
+    if tiled:
+        grid = (min(tile_size, ny) + 64) * (min(tile_size, nx) + 64)
+        working = 8 * grid * (6 + 4 * cells) + 32 * tile_size**2
+    else:
+        padded = (ny + 64) * (nx + 64)
+        working = 8 * pixels * n_img * 6 + 8 * padded * (n_img + 2 * cells + 2)
+    return int(held + working)
+
+
 def _digital(sensor, components, im: ImageMethod) -> bool:
     kernel = sensor["filter_kernel"]
     identity = kernel.shape == (1, 1) and float(kernel[0, 0]) == 1.0
@@ -257,6 +328,7 @@ def _assemble(images: dict, samp, radiometry, psf, flags, im: ImageMethod, attrs
               outputs=IMAGE_OUTPUTS):
     """The result Dataset: images (those of ``outputs``), kernel, pixel map and flags."""
     count = "count"
+    images = {k: (xr.DataArray(np.nan) if v is None else v) for k, v in images.items()}
     out = xr.Dataset({
         "reflectance": images["reflectance"],
         "ideal": named(images["ideal"], count, "ideal image in photoelectrons (reference "
@@ -283,7 +355,7 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
                    noise=True, method="accurate", components=None, reflectance=None,
                    reflectance_range=(0.05, 0.95), convolution=None, resampling=None,
                    basis=None, defocus_radius=None, channel_dim=None, outputs=None,
-                   counts_dtype=None) -> xr.Dataset:
+                   counts_dtype=None, tile_size=None) -> xr.Dataset:
     """A reference image as the camera would record it in the scenario (paper Eq. 5-6).
 
     Parameters
@@ -340,6 +412,13 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         cameras); cells without a count (past each scenario's size, NaN photoelectrons)
         hold the dtype's maximum, the variable's ``_FillValue`` (its ``encoding``: a
         NetCDF file reads them back as NaN). Default float64 with NaN.
+    tile_size : int, optional
+        Reference pixels per side of a tile (:data:`xbsm.simulate.tiles.TILE_SIZE`,
+        2048, by default; at least 64). A reference image larger than this along ``y``
+        or ``x`` is simulated in tiles (with the accurate path's knobs:
+        :mod:`xbsm.simulate.tiles`), so the working memory depends on the tile, not the
+        image. Any request is refused before allocation (a one-line ``MemoryError``
+        naming the image and the sizes) if it cannot fit in the memory available.
 
     Returns
     -------
@@ -354,7 +433,24 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         (radiometry, ``upsampled`` with one warning per call, ``image_small``,
         ``image_nonfinite``, ``image_flat``, ``reference_unresolved``).
     """
+    return _simulate(image, sensor, scenario, gsd=gsd, seed=seed, noise=noise, method=method,
+                     components=components, reflectance=reflectance,
+                     reflectance_range=reflectance_range, convolution=convolution,
+                     resampling=resampling, basis=basis, defocus_radius=defocus_radius,
+                     channel_dim=channel_dim, outputs=outputs, counts_dtype=counts_dtype,
+                     tile_size=tile_size, warn=True)
+
+
+def _simulate(image, sensor, scenario, *, gsd, seed, noise, method, components, reflectance,
+              reflectance_range, convolution, resampling, basis, defocus_radius, channel_dim,
+              outputs, counts_dtype, tile_size, warn):
+    """:func:`simulate_image`; ``warn``: the ``upsampled`` warning (off: the caller's)."""
     check_inputs(sensor, scenario)
+    tile_size = TILE_SIZE if tile_size is None else tile_size
+    if isinstance(tile_size, bool) or not isinstance(tile_size, int | np.integer) \
+            or tile_size < 64:
+        raise ValueError(f"tile_size must be a whole number of pixels in [64, inf); got "
+                         f"{tile_size!r}")
     counts_dtype, fill = _counts_fill(counts_dtype, sensor)
     im = image_method(method, convolution=convolution, resampling=resampling, basis=basis,
                       reflectance=reflectance if isinstance(reflectance, str) else None)
@@ -362,20 +458,42 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
     gsd = _reference_gsd(img, gsd)
     shape = (img.sizes["y_input"], img.sizes["x_input"])
     mapping = im.reflectance if reflectance is None or isinstance(reflectance, str) else reflectance
-    mapped = image_to_reflectance(img, mapping, reflectance_range,
-                                  dims=[*([channel] if channel else []), *INPUT_DIMS])
     radiometry = reflectance_to_photoelectrons(sensor, scenario, reflectance=[0.0, 1.0],
                                                method=im.model)
     samp = sampling(sensor, scenario, gsd, shape, im)
+    tiled = _tiled(shape, tile_size, im)
+    check_memory(_memory_needed(img, samp, outputs, counts_dtype, tiled, tile_size),
+                 _image_name(image), shape)
+    per_image = [*([channel] if channel else []), *INPUT_DIMS]
     comps, radius = _components(components, defocus_radius, sensor, im)
     digital = _digital(sensor, comps, im)
     optics = _optics(sensor, scenario, radiometry, samp, im, comps, radius, digital)
     pe = radiometry["photoelectrons"]
     offset, gain = pe.isel(reflectance=0, drop=True), (pe.isel(reflectance=-1, drop=True)
                                                        - pe.isel(reflectance=0, drop=True))
-    images = dict(reflectance=mapped["reflectance"], offset=offset, gain=gain,
-                  ideal=offset + gain * mapped["reflectance"])
-    blurred, psf, psf_flags = _camera_image(images, optics, samp, gsd, shape, im)
+    chosen = IMAGE_OUTPUTS if outputs is None else outputs
+    if tiled:
+        mapped = tile_statistics(img, mapping, reflectance_range, per_image, tile_size)
+        out, psf, psf_flags = _tiled_camera_image(img, mapped["statistics"], optics, samp,
+                                                  shape, im, tile_size, mapping,
+                                                  reflectance_range)
+        refl = None
+        if "reflectance" in chosen or "ideal" in chosen:
+            refl = named(tile_reflectance(img, mapped["statistics"], mapping, reflectance_range,
+                                          tile_size), "1", "scene reflectance")
+        images = dict(reflectance=refl, offset=offset, gain=gain, blurred=offset + gain * out,
+                      ideal=None if refl is None or "ideal" not in chosen
+                      else offset + gain * refl)
+        blurred = images["blurred"]
+    else:
+        mapped = image_to_reflectance(img, mapping, reflectance_range, dims=per_image)
+        # the ideal image (reference-sized, per scenario) only where it is kept or blurred
+        fused = (im.psf == "exact" and im.convolution == "fft"
+                 and im.resampling in ("cubic", "area", "none"))
+        images = dict(reflectance=mapped["reflectance"], offset=offset, gain=gain,
+                      ideal=offset + gain * mapped["reflectance"]
+                      if "ideal" in chosen or not fused else None)
+        blurred, psf, psf_flags = _camera_image(images, optics, samp, gsd, shape, im)
     entropy = camera.seed_entropy(seed)
     noisy = (camera.add_noise(blurred, sensor, seed=entropy, quantization=im.quantization)
              if noise else blurred)
@@ -383,7 +501,8 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         blurred, noisy = (camera.digital_filter(a, sensor["filter_kernel"], samp["size_y"],
                                                 samp["size_x"]) for a in (blurred, noisy))
     flags = radiometry["flags"] | samp["flags"] | psf_flags | mapped["flags"]
-    _warn_upsampled(samp)
+    if warn:
+        _warn_upsampled(samp)
     counts = camera.digitize(noisy, sensor, im.quantization)
     if counts_dtype is not None:
         counts = _integer_counts(counts, counts_dtype, fill)
@@ -392,3 +511,87 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         "seed": str(entropy), "noise": "on" if noise else "off",
         "components": " ".join(comps), "reference_gsd": str(gsd),
         **({"alpha": "dropped"} if alpha else {})})
+
+
+def _image_seed(entropy: int, index: int) -> int:
+    """The seed of image ``index`` of a list: spawned from the run's seed and its position."""
+    words = np.random.SeedSequence(entropy, spawn_key=(index,)).generate_state(2, np.uint32)
+    return int(words[0]) << 32 | int(words[1])
+
+
+def _as_list_item(item, index: int):
+    """One image of a list as a DataArray named by its name or its index (for messages)."""
+    if isinstance(item, xr.DataArray):
+        return item if item.name is not None else item.rename(f"#{index}")
+    array = np.asarray(item)
+    dims = ("y", "x") if array.ndim == 2 else ("y", "x", "band")
+    if array.ndim == 3 and array.shape[-1] == 4:  # RGBA: the alpha channel labelled, dropped
+        return xr.DataArray(array, dims=dims, name=f"#{index}",
+                            coords={"band": ["R", "G", "B", "A"]})
+    if array.ndim not in (2, 3):
+        raise ValueError(f"images[{index}] must be 2-D (rows, columns) or 3-D (rows, columns, "
+                         f"3 or 4 channels); got shape {array.shape}")
+    return xr.DataArray(array, dims=dims, name=f"#{index}")
+
+
+def simulate_images(images, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd, seed=None,
+                    **kwargs) -> list:
+    """A list of reference images of any sizes and channel counts, one run of the camera.
+
+    Each image is simulated on its own sampling, as :func:`simulate_image` does (its own
+    blur: one kernel per distinct optical state and reference sampling, never one image's
+    kernel reused for another's sampling); a camera that samples finer than a reference
+    is flagged ``upsampled`` on each such image and warned about once for the whole list.
+
+    Parameters
+    ----------
+    images : sequence of np.ndarray or xr.DataArray
+        Reference images, each as :func:`simulate_image` takes one; a DataArray's name
+        (else ``#index``) names it in messages.
+    sensor, scenario : xr.Dataset
+        As for :func:`simulate_image`.
+    gsd : float or sequence of float
+        Reference GSD, one for all or one per image. [m]
+    seed : int, optional
+        The run's seed; image ``i`` gets a seed spawned from it and ``i`` (recorded in its
+        result's ``seed`` attribute, so any image can be regenerated alone). ``None``:
+        fresh entropy.
+    **kwargs
+        Any other keyword of :func:`simulate_image`.
+
+    Returns
+    -------
+    list of xr.Dataset
+        One :func:`simulate_image` result per image, in order.
+    """
+    images = list(images)
+    gsds = [gsd] * len(images) if np.ndim(gsd) == 0 else list(gsd)
+    if len(gsds) != len(images):
+        raise ValueError(f"gsd must be one value or one per image ({len(images)}); got "
+                         f"{len(gsds)}")
+    entropy = camera.seed_entropy(seed)
+    options = dict(noise=True, method="accurate", components=None, reflectance=None,
+                   reflectance_range=(0.05, 0.95), convolution=None, resampling=None,
+                   basis=None, defocus_radius=None, channel_dim=None, outputs=None,
+                   counts_dtype=None, tile_size=None)
+    unknown = sorted(set(kwargs) - set(options))
+    if unknown:
+        raise ValueError(f"simulate_images got unknown keywords {unknown}; it takes those of "
+                         "simulate_image")
+    options.update(kwargs)
+    options["outputs"] = Selection(IMAGE_OUTPUTS).check("outputs", options["outputs"])
+    results = [
+        _simulate(_as_list_item(item, i), sensor, scenario, gsd=g,
+                  seed=_image_seed(entropy, i), warn=False, **options)
+        for i, (item, g) in enumerate(zip(images, gsds, strict=True))]
+    upsampled = [i for i, r in enumerate(results)
+                 if bool(fl.has_flag(r["flags"], "upsampled").any())]
+    if upsampled:
+        shown = ", ".join(str(i) for i in upsampled[:10]) + (", ..." if len(upsampled) > 10
+                                                              else "")
+        warnings.warn(
+            f"{len(upsampled)} of {len(results)} images (indices {shown}) are more finely "
+            "sampled by the camera than by their reference (flag 'upsampled'): the camera "
+            "is better than the reference, so they lack detail it would record",
+            UserWarning, stacklevel=2)
+    return results

@@ -27,10 +27,11 @@ import xarray as xr
 from ._arrays import align_leading
 from .convolve import cropped_inverse, padded_spectrum
 
-__all__ = ["blur_and_resample", "resample", "resampling_taps"]
+__all__ = ["apply_taps", "blur_and_resample", "cell_key", "reflect_index", "resample",
+           "resampling_taps"]
 
 
-def _reflect(index, n: int):
+def reflect_index(index, n: int):
     """Whole-sample reflection of integer indices into [0, n - 1]."""
     if n == 1:
         return np.zeros_like(index)
@@ -51,7 +52,7 @@ def _cubic(n_in, centre):
     u = centre - 0.5
     first = np.floor(u)
     index = first[:, None].astype(np.int64) + np.arange(-1, 3)
-    return _reflect(index, n_in), _keys(u - first)
+    return reflect_index(index, n_in), _keys(u - first)
 
 
 def _area(n_in, lower, upper):
@@ -59,7 +60,7 @@ def _area(n_in, lower, upper):
     index = np.floor(lower)[:, None].astype(np.int64) + np.arange(width)
     overlap = np.clip(np.minimum(index + 1, upper[:, None]) - np.maximum(index, lower[:, None]),
                       0.0, None)
-    return _reflect(index, n_in), overlap / (upper - lower)[:, None]
+    return reflect_index(index, n_in), overlap / (upper - lower)[:, None]
 
 
 def _pil(n_in, n_out):
@@ -159,7 +160,7 @@ def resampling_taps(sampling: xr.Dataset, shape, kind: str) -> xr.Dataset:
     return xr.Dataset(out)
 
 
-def _apply_taps(img, index_y, weight_y, index_x, weight_x, single=False):
+def apply_taps(img, index_y, weight_y, index_x, weight_x, single=False):
     """Resample (..., rows, columns) by tap tables; ``single``: float32 passes (Pillow)."""
     img, index_y, weight_y, index_x, weight_x = align_leading(
         img, 2, index_y, 2, weight_y, 2, index_x, 2, weight_x, 2)
@@ -202,7 +203,7 @@ def resample(image: xr.DataArray, taps: xr.Dataset, dims=("y_input", "x_input"),
         image = image.chunk({d: -1 for d in dims})
     sizes = {"y": taps.sizes["y"], "x": taps.sizes["x"]}
     out = xr.apply_ufunc(
-        _apply_taps, image, taps["index_y"], taps["weight_y"], taps["index_x"],
+        apply_taps, image, taps["index_y"], taps["weight_y"], taps["index_x"],
         taps["weight_x"], kwargs={"single": single},
         input_core_dims=[list(dims), ["y", "tap_y"], ["y", "tap_y"], ["x", "tap_x"],
                          ["x", "tap_x"]],
@@ -211,7 +212,7 @@ def resample(image: xr.DataArray, taps: xr.Dataset, dims=("y_input", "x_input"),
     return out.assign_attrs(image.attrs)
 
 
-def _cell_key(cell, cells, shape):
+def cell_key(cell, cells, shape):
     """Index of one scenario cell into an array of ``shape`` (size-1 dims broadcast)."""
     return tuple((i if n > 1 else 0) if m > 1 else slice(None)
                  for i, m, n in zip(cell, cells, shape, strict=True))
@@ -227,11 +228,11 @@ def _blur_resample_kernel(img, otf, index_y, weight_y, index_x, weight_x, pad, s
     lead = np.broadcast_shapes(img.shape[:-2], cells)
     out = np.empty(lead + (index_y.shape[-2], index_x.shape[-2]))
     for cell in np.ndindex(cells):
-        part = spectrum[_cell_key(cell, cells, spectrum.shape[:-2])]
-        part = part * otf[_cell_key(cell, cells, otf.shape[:-2])]
+        part = spectrum[cell_key(cell, cells, spectrum.shape[:-2])]
+        part = part * otf[cell_key(cell, cells, otf.shape[:-2])]
         blurred = cropped_inverse(part, pad, img.shape[-2:], size_x)
-        taps = [t[_cell_key(cell, cells, t.shape[:-2])] for t in tables]
-        out[_cell_key(cell, cells, lead)] = _apply_taps(blurred, *taps)
+        taps = [t[cell_key(cell, cells, t.shape[:-2])] for t in tables]
+        out[cell_key(cell, cells, lead)] = apply_taps(blurred, *taps)
     return out
 
 
