@@ -401,7 +401,11 @@ def _kronrod_sensors(c, ifov, lobe_width, kinks=None, *, nodes_per_panel, panels
     are 1/a apart), the first of them split geometrically (ratio ``grading_ratio``) down to
     ``graded_frequency`` cycles per pixel, so that an OTF living in a small part of the
     passband (jitter, turbulence, defocus: any smooth blur) meets panels of its own scale.
-    The sensors with the same panel counts share one node formula.
+    Each of the aperture OTF's ``kinks`` moves the nearest interior uniform edge onto
+    itself, or adds an edge where that one is taken (:func:`_with_kinks`): Gauss rules
+    converge only algebraically on a panel that straddles a kink (measured: an annular
+    MWIR system at Q 73, four panels, 4.5e-5 relative in RER without the kink edges,
+    1.3e-7 with them). The sensors with the same panel counts share one node formula.
     """
     flat_c, flat_ifov = c.ravel(), ifov.ravel()
     flat_lobe = np.broadcast_to(lobe_width, c.shape).ravel()
