@@ -194,6 +194,9 @@ NOT_LABELLED = MappingProxyType({
     "xbsm.radiometry.resample_spectral": "keeps the attributes of the sensor curve it resamples",
     "xbsm.quadrature.aperture_breakpoints": "returns a numpy array",
     "xbsm.quadrature.detector_breakpoints": "returns a numpy array",
+    "xbsm.quadrature.aperture_kink_fractions": "returns a numpy array",
+    "xbsm.quadrature.band_optics_limits": "returns a dict of the stage's DataArrays, labelled "
+    "from quadrature.CUTOFF_OUTPUTS (band_cutoff's case checks the cutoff's units)",
     "xbsm.quadrature.pybsm_slice_count": "returns an int",
     "xbsm.quadrature.undersampled": "returns a boolean mask that feeds a flag",
     "xbsm.metrics.giqe.giqe_calibrations": "returns a table of calibrations",

@@ -60,7 +60,10 @@ _DECLARED = {**radiometry.SIGNAL_OUTPUTS, **noise.OUTPUTS, **radiometry.SENSITIV
 # ---- the composition ---------------------------------------------------------------
 
 def _snr_chain(ap, m, targets: str, *, sensitivity: bool = False):
-    """The SNR chain: its result's variables, the band atmosphere and the optics cutoff.
+    """The SNR chain: its result's variables, the band atmosphere and the optics limits.
+
+    The optics limits (:data:`quadrature.CUTOFF_OUTPUTS`): the cutoff D / lambda_min and the
+    band's wavelength ratio, where the aperture OTF ends and has its kinks.
 
     ``sensitivity``: also the target's NETD, NER and NEI (the noise over the temperature
     derivative of its signal).
@@ -69,7 +72,7 @@ def _snr_chain(ap, m, targets: str, *, sensitivity: bool = False):
     radiances = ap.radiances(atm, targets, m)
     band = ap.sensor_band(atm, m)
     signal = ap.signal(atm, band, radiances, m)
-    cutoff = ap.cutoff(atm, band)
+    optics = ap.optics_limits(atm, band)
     noise_ = ap.noise(signal)
     brighter = np.maximum(signal["target_photoelectrons"], signal["background_photoelectrons"])
     flags = ap.flag(atm["flags"], "well_fill_limited", signal["well_fill_scale"] < 1.0)
@@ -88,14 +91,14 @@ def _snr_chain(ap, m, targets: str, *, sensitivity: bool = False):
     }
     if sensitivity:
         values.update(ap.sensitivity(atm, band, signal, noise_["total_noise"], m))
-    return values, atm, cutoff
+    return values, atm, optics
 
 
 def _niirs_chain(ap, m, calibration, targets: str = "giqe") -> dict:
     """The NIIRS chain: the SNR chain, the viewing geometry, the edge terms, the GIQE."""
-    r, atm, cutoff = _snr_chain(ap, m, targets)
+    r, atm, optics = _snr_chain(ap, m, targets)
     view = ap.view(m)
-    edges = _edge_chain(ap, r, atm, cutoff, view, m)
+    edges = _edge_chain(ap, r, atm, optics, view, m)
     s = ap.sensor
     metrics = ap.giqe(
         rer=edges["rer"], eho=edges["eho"], rer_x=edges["rer_unfiltered_x"],
@@ -120,9 +123,10 @@ def _niirs_chain(ap, m, calibration, targets: str = "giqe") -> dict:
     }
 
 
-def _edge_chain(ap, r, atm, cutoff, view, m) -> dict:
+def _edge_chain(ap, r, atm, optics, view, m) -> dict:
     """RER and EHO of the system OTF on the x and y slices, at the method's quadrature nodes."""
     ifov_x, ifov_y = view["ifov_x"], view["ifov_y"]
+    cutoff = optics["cutoff_frequency"]
     s = ap.sensor
     # the widest blur whose OTF has lobes (a sensor quantity, so that a sweep over scenarios
     # shares one rule): the drift angle over the nominal exposure (the well-fill limit only
@@ -130,7 +134,9 @@ def _edge_chain(ap, r, atm, cutoff, view, m) -> dict:
     drift = (np.maximum(abs(s["drift_rate_x"]), abs(s["drift_rate_y"]))
              * s["integration_time"] * s["tdi_stages"])
     lobe_width = np.maximum(drift, 8.0 * s["defocus_opd"] / s["aperture_diameter"])
-    nodes, weights = ap.edge_nodes(cutoff, ifov_x, ifov_y, lobe_width, m)
+    # and where the aperture OTF has kinks: its pieces at both ends of the band
+    nodes, weights = ap.edge_nodes(cutoff, ifov_x, ifov_y, lobe_width,
+                                   s["obscuration_ratio"], optics["band_wavelength_ratio"], m)
     otf = ap.system_slices(nodes, atm, r["spectral_weights"], r["effective_integration_time"],
                            view["slant_range"], m)
     ifov = ap.orientations(ifov_x, ifov_y)
@@ -283,9 +289,9 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, m, frequency, fy) -> xr
     ``frequency`` None: 201 points from 0 to the optics cutoff D / lambda_min.
     """
     ap = Labelled(sensor, scenario)
-    r, atm, cutoff = _snr_chain(ap, m, "giqe")
+    r, atm, optics = _snr_chain(ap, m, "giqe")
     if frequency is None:
-        frequency = np.linspace(0.0, float(cutoff.max()), 201)
+        frequency = np.linspace(0.0, float(optics["cutoff_frequency"].max()), 201)
     frequency = params.frequencies("frequency", params.labelled("frequency", frequency,
                                                                 "frequency"))
     if "frequency" in frequency.coords:
@@ -414,11 +420,11 @@ class Labelled:
         return radiometry.signal_terms(self.sensor, atm, *radiances, m.constants, band=band,
                                        noise_rates=noise_rates)
 
-    def cutoff(self, atm, band):
+    def optics_limits(self, atm, band):
         s = self.sensor
-        return quadrature.band_cutoff(s["aperture_diameter"], atm["wavelength"],
-                                      band["quantum_efficiency"], band["optics_transmission"],
-                                      s["wavelength_min"])
+        return quadrature.band_optics_limits(
+            s["aperture_diameter"], atm["wavelength"], band["quantum_efficiency"],
+            band["optics_transmission"], s["wavelength_min"])
 
     def noise(self, signal):
         return noise.noise_terms(signal, self.sensor)
@@ -450,7 +456,7 @@ class Labelled:
             s["focal_length"], elevation=m.elevation, form=m.geometry)
 
     @staticmethod
-    def edge_nodes(cutoff, ifov_x, ifov_y, lobe_width, m):
+    def edge_nodes(cutoff, ifov_x, ifov_y, lobe_width, obscuration_ratio, wavelength_ratio, m):
         # a drift (or defocus) swept on dims of its own gets the rule of its largest value:
         # finer than each needs, but one rule, so that the optics OTF is not evaluated per
         # drift
@@ -458,8 +464,8 @@ class Labelled:
                if d not in {*cutoff.dims, *ifov_x.dims, *ifov_y.dims}]
         if own:
             lobe_width = lobe_width.max(own)
-        return quadrature.edge_nodes(cutoff, ifov_x, ifov_y, lobe_width,
-                                     **m.edge_quadrature_knobs())
+        return quadrature.edge_nodes(cutoff, ifov_x, ifov_y, lobe_width, obscuration_ratio,
+                                     wavelength_ratio, **m.edge_quadrature_knobs())
 
     def system_slices(self, nodes, atm, spectral_weights, integration_time, slant_range, m):
         # the weights carry their wavelengths; ``atm`` is for the direct applier's arrays
@@ -533,12 +539,11 @@ class Direct:
             *radiometry.signal_inputs(self.sensor, atm, band, radiances), h=k.planck,
             c=k.speed_of_light, noise_rates=noise_rates)
 
-    def cutoff(self, atm, band):
+    def optics_limits(self, atm, band):
         p = self.sensor
         return quadrature.band_cutoff_arrays(p["aperture_diameter"], atm["wavelength"],
                                              band["quantum_efficiency"],
-                                             band["optics_transmission"],
-                                             p["wavelength_min"])["cutoff_frequency"]
+                                             band["optics_transmission"], p["wavelength_min"])
 
     def noise(self, signal):
         return noise.noise_arrays(*noise.noise_inputs(self.sensor, signal))
@@ -564,9 +569,10 @@ class Direct:
                                        elevation=m.elevation, form=m.geometry)
 
     @staticmethod
-    def edge_nodes(cutoff, ifov_x, ifov_y, lobe_width, m):
+    def edge_nodes(cutoff, ifov_x, ifov_y, lobe_width, obscuration_ratio, wavelength_ratio, m):
         nodes, weights, sine, error = quadrature.edge_rule_arrays(
-            cutoff, ifov_x, ifov_y, lobe_width, **m.edge_quadrature_knobs())
+            cutoff, ifov_x, ifov_y, lobe_width, obscuration_ratio, wavelength_ratio,
+            **m.edge_quadrature_knobs())
         return nodes, (weights, sine, error)
 
     def system_slices(self, nodes, atm, spectral_weights, integration_time, slant_range, m):

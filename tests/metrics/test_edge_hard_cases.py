@@ -176,3 +176,53 @@ def test_flags_agree_between_single_calls_and_sweeps():
             np.testing.assert_array_equal(single.flags.values, cell.flags.values)
             if j == 0:  # resolved: the two rules agree to fast's accuracy (1e-7 relative)
                 np.testing.assert_allclose(single.rer_x, cell.rer_x, rtol=1e-6)
+
+
+def test_annular_aperture_kinks_are_panel_edges():
+    # The one cell of recipes/evidence/preset_error.py the kink-blind panels missed (an
+    # annular MWIR system sampled far finer than its optics resolve, Q about 70, four
+    # uniform panels): accurate was off by 4.5e-5 relative in RER (1.8e-3 NIIRS, GIQE 5),
+    # fast by 1.5e-4. With the aperture OTF's kinks at both band ends as panel edges,
+    # measured against the dense trapezoid: accurate 1.3e-7, fast 1.3e-6.
+    sensor = xbsm.sensor(aperture_diameter=0.0548, focal_length=9.28, pixel_pitch_x=6.96e-6,
+                         wavelength_min=3e-6, wavelength_max=5e-6, obscuration_ratio=0.49,
+                         integration_time=1e-3, read_noise=10.0, max_well=1e5,
+                         jitter_x=5.8e-8, jitter_y=5.8e-8, drift_rate_x=1e-4,
+                         drift_rate_y=4.5e-6)
+    scenario = xbsm.scenario(altitude=15000.0, ground_range=54e3, visibility=23.0)
+    for method, rel in (("accurate", 1e-6), ("fast", 1e-5)):
+        out = niirs_quiet(sensor, scenario, method)
+        reference = dense_rer(sensor, scenario, method)
+        np.testing.assert_allclose([float(out.rer_x), float(out.rer_y)], reference, rtol=rel)
+
+
+def test_aperture_kink_fractions_are_the_annular_pupil_pieces_at_both_band_ends():
+    eps, ratio = 0.4, 0.55 / 0.85  # Olson: obscuration 0.4, band 0.55-0.85 um
+    pieces = np.array([eps, (1 - eps) / 2, (1 + eps) / 2])
+    expected = np.sort(np.concatenate([pieces, [ratio], ratio * pieces]))
+    got = quadrature.aperture_kink_fractions(eps, ratio)
+    np.testing.assert_allclose(got, expected, rtol=1e-15)
+    # a clear pupil: the longest wavelength's cutoff alone; one wavelength: no kink at all
+    clear = quadrature.aperture_kink_fractions(0.0, ratio)
+    assert np.isfinite(clear).sum() == 1 and np.nanmax(clear) == pytest.approx(ratio)
+    assert np.isnan(quadrature.aperture_kink_fractions(0.0, 1.0)).all()
+    # a kink repeated (eps = 1/3 is also (1 - eps) / 2) counts once; over sensors at once
+    both = quadrature.aperture_kink_fractions(np.array([1 / 3, 0.4]), np.array([1.0, ratio]))
+    assert np.isfinite(both[:, 0]).sum() == 2 and np.isfinite(both[:, 1]).sum() == 7
+
+
+def test_kinks_move_the_nearest_panel_edge_and_add_panels_only_where_needed():
+    knobs = xbsm.method("accurate").edge_quadrature_knobs()
+    knobs.pop("name", None), knobs.pop("rule")
+    cutoff, ifov = np.array(1.0 / IFOV), np.array(IFOV)
+    plain = quadrature._kronrod_sensors(cutoff, ifov, np.array(0.0), **knobs)[0]
+    kinks = quadrature.aperture_kink_fractions(0.4, 0.55 / 0.85)
+    nodes = quadrature._kronrod_sensors(cutoff, ifov, np.array(0.0), kinks, **knobs)[0]
+    per_panel = 2 * knobs["nodes_per_panel"] + 1
+    added = (nodes.size - plain.size) // per_panel
+    assert 0 <= added < np.isfinite(kinks).sum()  # some kinks took a uniform edge's place
+    # every kink is a panel edge: no node of a panel lies on both sides of it
+    edges_between = nodes.reshape(-1, per_panel)
+    for k in kinks[np.isfinite(kinks)] * cutoff:
+        straddles = (edges_between.min(axis=1) < k) & (edges_between.max(axis=1) > k)
+        assert not straddles.any()
