@@ -161,8 +161,9 @@ def test_impossible_input_raises(call, name):
         call()
 
 
-@pytest.mark.parametrize("block", [2**6, 2**11, 2**30])
-def test_polychromatic_kernel_values_do_not_depend_on_the_block(monkeypatch, block):
+@pytest.mark.parametrize("block, step", [(2**6, 2**6), (2**11, 2**14), (2**30, 2**8),
+                                         (2**30, 2**30)])
+def test_polychromatic_kernel_values_do_not_depend_on_the_block(monkeypatch, block, step):
     """The kernel evaluates cache-sized blocks (wavelength outermost, issue 22's speed
     work) and sums each value in band order: every block size gives the same bits, on one
     scenario and on a sweep with weights of its own per scenario."""
@@ -178,6 +179,7 @@ def test_polychromatic_kernel_values_do_not_depend_on_the_block(monkeypatch, blo
     ]
     reference = [t.polychromatic_kernel(*case) for case in cases]  # the module's own block
     monkeypatch.setattr(t, "_BLOCK", block)
+    monkeypatch.setattr(t, "_STEP", step)
     for case, expected in zip(cases, reference, strict=True):
         got = t.polychromatic_kernel(*case)
         assert got.shape == expected.shape

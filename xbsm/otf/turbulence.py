@@ -43,12 +43,18 @@ REFERENCE_WAVELENGTH = 1.0e-6
 
 PATH_RULES = ("trapezoid", "gauss-legendre")
 
-#: Values of the (frequency x scenario x wavelength) block that the polychromatic OTF
-#: evaluates at a time: 2^14 (128 KiB a temporary), not 2^16: the kernel's dozen
-#: temporaries then stay in the 1 MiB L2 cache of this machine's cores (CPU time on the
-#: focal-length sweep's 4.65 million values 122-135 ms at 2^16, 62 ms at 2^14; one
-#: mwir_narrow call 1.9 -> 1.4 ms). The block changes no value (the sum runs in band order).
-_BLOCK = 1 << 14
+#: Values of the (frequency x scenario) columns that the polychromatic OTF evaluates at a
+#: time (a block of the result's last axis; every input that does not vary along that axis
+#: is evaluated once for the block, so a larger block shares more).
+_BLOCK = 1 << 16
+#: Values of the (frequency x scenario x wavelength) temporaries inside a block: 2^14
+#: (128 KiB each), so that the kernel's dozen temporaries stay in the 1 MiB L2 cache of
+#: this machine's cores: one mwir_narrow call (1,680 nodes x 61 wavelengths, one block)
+#: 2.4 -> 1.3 ms of CPU against 2^16. Not the block size itself: at 2^14 columns the
+#: crossed sweeps (visibility or integration time x 100 ranges) evaluated the range-only
+#: turbulence exponent once per visibility column, 2-5x the evaluations. Neither size
+#: changes a value (the sum runs in band order).
+_STEP = 1 << 14
 
 
 @contract(cn2_at_1m=CN2, cn2_tropopause=CN2, cn2_upper_air=CN2, cn2_multiplier=CN2_SCALE)
@@ -569,12 +575,12 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
     """Weighted sum over the last (wavelength) axis (numpy).
 
     ``w`` is normalised here. The OTFs are evaluated a block at a time, at most about
-    :data:`_BLOCK` values (columns of the last axis, then as many wavelengths as fit:
-    all of them for one scenario, one at a time for a large sweep), so temporaries stay
-    in cache and memory at one block; every value is summed wavelength by wavelength
-    in band order whatever the block. Inside a block the wavelength is the outermost
-    axis, so that every ufunc runs along the long contiguous axis of the other inputs
-    (with wavelength innermost, a block of a few wavelengths made numpy's inner loops a
+    :data:`_BLOCK` values (columns of the last axis), then as many wavelengths as make
+    :data:`_STEP` values (a few for one scenario, one at a time for a large sweep), so
+    temporaries stay in cache and memory at one block; every value is summed wavelength
+    by wavelength in band order whatever the block. Inside a block the wavelength is the
+    outermost axis, so that every ufunc runs along the long contiguous axis of the other
+    inputs (with wavelength innermost, a step of a few wavelengths made numpy's inner loops a
     few values long: twice the time on one scenario of 1,680 nodes x 61 wavelengths).
     """
     w = w / np.nansum(w, axis=-1, keepdims=True)
@@ -591,7 +597,7 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
         radial_, r0_ref_, exposure_, speed_, diameter_, reference_, wl_, w_ = (
             a[..., columns] if a.shape[-1] > 1 else a for a in inputs)
         out = total[..., columns]
-        step = max(1, _BLOCK // max(1, out.size))
+        step = max(1, _STEP // max(1, out.size))
         for start in range(0, n_wavelength, step):
             lam = wl_[start:start + step]
             r0 = _scale_kernel(r0_ref_, lam, reference_)
