@@ -7,7 +7,9 @@ each method. Where the test runs on the fixture's numpy and CPU extensions (nump
 paths depend on both), ``method="pybsm"`` must agree to the bit and ``"accurate"`` /
 ``"fast"`` within 1e-12 relative (the issue's bound for an unavoidable reassociation).
 Elsewhere (another numpy, another CPU: the CI's minimum-versions job) a different libm
-rounds differently, and the pyBSM parity tests' floor for that applies: 1e-9 relative.
+rounds differently, and pyBSM's law-of-cosines slant range amplifies one rounding of a
+cosine on short paths (``tests/pybsm_cases.geometry_rtol``: up to about 1e-6 at 100 m), so
+the check there is 1e-6 relative: loose for rounding, tight for any change of the model.
 """
 
 from __future__ import annotations
@@ -81,10 +83,9 @@ def test_speed_reference_same_cases(current):
 
 @pytest.mark.parametrize("method", recipe.METHODS)
 def test_speed_reference_values_unchanged(current, method):
-    """pybsm to the bit, accurate / fast within 1e-12 relative (1e-9 on another libm)."""
+    """pybsm to the bit, accurate / fast within 1e-12 relative (1e-6 on another libm)."""
     exact = method == "pybsm" and SAME
-    rtol = 1e-12 if SAME else 1e-9
-    worst = 0.0
+    rtol = 1e-12 if SAME else 1e-6
     for key, ref in REFERENCE["cases"].items():
         if not key.endswith(f"/{method}") or "error" in ref:
             continue
@@ -100,5 +101,4 @@ def test_speed_reference_values_unchanged(current, method):
             with np.errstate(invalid="ignore"):
                 relative = np.where(same, 0.0, np.abs(got[ok] - expected[ok])
                                     / np.maximum(np.abs(expected[ok]), 1e-300))
-            worst = max(worst, float(relative.max(initial=0.0)))
             assert np.all(relative <= rtol), (key, name, float(relative.max()))
