@@ -29,7 +29,7 @@ AGAINST_THE_ORDER = {
 
 #: Top-level test files about the whole package, not one module.
 WHOLE_PACKAGE = {"test_architecture", "test_layout", "test_conventions", "test_docs",
-                 "test_packaging", "test_bad_inputs"}
+                 "test_packaging", "test_bad_inputs", "test_speed_reference"}
 #: Top-level test files named otherwise than their module: file stem -> module.
 NAMED_OTHERWISE = {"test_model_snr": "model", "test_model_niirs": "model",
                    "test_model_netd": "model", "test_model_mrtd": "model",

@@ -226,3 +226,26 @@ def test_defocus_needs_exactly_one_defocus_argument():
         defocused_aperture(f, f, LAM, D, defocus_waves=0.1, defocus_opd=1e-7)
     with pytest.raises(ValueError, match="defocus_waves"):
         defocused_aperture(f, f, LAM, D, defocus_waves=np.nan)
+
+
+@pytest.mark.parametrize("eta", [0.05, 0.4, 0.9])
+def test_one_obscuration_ratio_equals_the_general_path_to_the_bit(eta):
+    """The one-ratio path (no gathers, issue 22's speed work) gives the general path's
+    values to the bit: the same formula, each term's zero region exact (nu/eta >= 1 clips
+    to an argument of 1, whose term is exactly 0). The general path is the one a sweep
+    over the ratio takes (one ratio per entry)."""
+    from xbsm.otf.aperture import circular_aperture_kernel
+
+    rng = np.random.default_rng(7)
+    radial = rng.uniform(-0.01, 1.3, (40, 3, 31)) * CUTOFF
+    # the pieces' boundaries exactly: nu = eta, (1 -+ eta)/2, 1, and one step either side
+    edges = np.array([eta, (1 - eta) / 2, (1 + eta) / 2, 1.0, 0.0])
+    radial.flat[:15] = np.concatenate([edges, np.nextafter(edges, 2), np.nextafter(edges, -1)]
+                                      ) * CUTOFF
+    radial.flat[15] = np.nan
+    one = circular_aperture_kernel(radial, D, LAM, eta)
+    general = circular_aperture_kernel(radial, D, LAM, np.full(radial.shape, eta))
+    assert one.shape == general.shape
+    assert np.array_equal(one, general, equal_nan=True)
+    assert np.array_equal(np.signbit(one), np.signbit(general))
+    assert np.isnan(one.flat[15]) and np.all(one[radial >= CUTOFF] == 0.0)

@@ -105,3 +105,27 @@ def test_models_order_as_measured_and_agree_at_zero():
     n = {m: float(xbsm.niirs(s, SCENARIO, method=xbsm.method("accurate", defocus_otf=m))
                   .niirs.sel(giqe=4)) for m in ("hopkins", "geometric", "gaussian")}
     assert n["geometric"] < n["gaussian"] < n["hopkins"]
+
+
+@pytest.mark.parametrize("lengths", [(0.05, 0.05), (0.05, 0.08)])
+@pytest.mark.parametrize("variance", [0.0, 0.3])
+def test_wavefront_slices_equal_the_pair_kernel_to_the_bit(lengths, variance):
+    """The direct applier evaluates the wavefront OTF on each slice's own 1-D nodes (and
+    once for both when the correlation lengths are equal: issue 22's speed work); the
+    values are those of the kernel on the (frequency, orientation) pair, to the bit."""
+    from xbsm.otf.system import _wavefront_band_kernel, _wavefront_slices
+
+    rng = np.random.default_rng(11)
+    nodes = np.sort(rng.uniform(0.0, 4e5, 200))
+    wl = np.linspace(3.6e-6, 4.2e-6, 61)
+    w = rng.uniform(0.0, 1.0, 61)
+    w = w / w.sum()
+    p = {"wavefront_variance": np.float64(variance), "wavefront_wavelength": np.float64(1e-6),
+         "wavefront_correlation_length_x": np.float64(lengths[0]),
+         "wavefront_correlation_length_y": np.float64(lengths[1])}
+    pair = _wavefront_band_kernel(p["wavefront_variance"], p["wavefront_wavelength"],
+                                  nodes[:, None] * [1.0, 0.0], lengths[0],
+                                  nodes[:, None] * [0.0, 1.0], lengths[1], wl, w)
+    slices = _wavefront_slices(p, nodes, wl, w)
+    assert slices.shape == pair.shape == (200, 2)
+    assert np.array_equal(slices, pair)

@@ -159,3 +159,28 @@ def test_slant_path_r0_with_dask_scenario_stays_lazy():
 def test_impossible_input_raises(call, name):
     with pytest.raises(ValueError, match=name):
         call()
+
+
+@pytest.mark.parametrize("block, step", [(2**6, 2**6), (2**11, 2**14), (2**30, 2**8),
+                                         (2**30, 2**30)])
+def test_polychromatic_kernel_values_do_not_depend_on_the_block(monkeypatch, block, step):
+    """The kernel evaluates cache-sized blocks (wavelength outermost, issue 22's speed
+    work) and sums each value in band order: every block size gives the same bits, on one
+    scenario and on a sweep with weights of its own per scenario."""
+    rng = np.random.default_rng(3)
+    wl = np.linspace(0.6e-6, 0.9e-6, 31)
+    cases = [
+        (np.sort(rng.uniform(0, 3e5, 300)), np.float64(0.05), 0.01, 100.0, 0.2, 1e-6, wl,
+         rng.uniform(0.2, 1.0, 31)),
+        (rng.uniform(0, 3e5, (50, 1)), rng.uniform(0.01, 0.2, 40), rng.uniform(1e-3, 3e-2, 40),
+         100.0, 0.2, 1e-6, wl, rng.uniform(0.0, 1.0, (40, 31))),
+        (rng.uniform(0, 3e5, (50, 7)), np.float64(0.08), 0.02, 100.0, rng.uniform(0.1, 0.5, 7),
+         1e-6, wl, rng.uniform(0.0, 1.0, (7, 31))),
+    ]
+    reference = [t.polychromatic_kernel(*case) for case in cases]  # the module's own block
+    monkeypatch.setattr(t, "_BLOCK", block)
+    monkeypatch.setattr(t, "_STEP", step)
+    for case, expected in zip(cases, reference, strict=True):
+        got = t.polychromatic_kernel(*case)
+        assert got.shape == expected.shape
+        assert np.array_equal(got, expected)

@@ -113,25 +113,24 @@ def _edge_terms_kernel(otf, weights, abscissa, ifov, rer=True, eho=True):
     return tuple(out) if len(out) > 1 else out[0]
 
 
-def _edge_terms_error_kernel(otf, weights, error_weights, abscissa, ifov):
+def _edge_terms_error_kernel(otf, weights, error_weights, abscissa, ifov, tables=None):
     """RER, EHO and their error estimates from a rule with embedded error weights (numpy).
 
     One sine (and cosine) table at the RER and EHO positions, contracted with the OTF
     times the weights and times the error weights (Kronrod minus embedded Gauss): the
     second contraction is the difference of the two rules' edge responses. Returns
     RER, EHO, the absolute RER difference and the largest absolute edge-response difference
-    over the EHO positions.
+    over the EHO positions. ``tables``: :func:`_edge_tables` of the same abscissa and
+    ifov, when the caller has them (the filtered and unfiltered OTFs share one).
     """
-    positions = np.concatenate([RER_POSITIONS, EHO_POSITIONS])
+    if tables is None:
+        tables = _edge_tables(abscissa, ifov, cosine=np.iscomplexobj(otf))
+    sine, cosine = tables
     with np.errstate(all="ignore"):  # IEEE results without warnings, as xarray's arithmetic
-        phase = (2.0 * np.pi * abscissa[..., None, :] * np.asarray(ifov)[..., None, None]
-                 * positions[:, None])
-        sine = np.sin(phase) / abscissa[..., None, :]
-        cosine = np.cos(phase) / abscissa[..., None, :] if np.iscomplexobj(otf) else None
 
         def contract(w):
             weighted = (otf * w)[..., None, :]
-            if cosine is None:
+            if not np.iscomplexobj(otf):
                 return _sum_of_products(weighted, sine) / np.pi
             return (_sum_of_products(weighted.real, sine)
                     + _sum_of_products(weighted.imag, cosine)) / np.pi
@@ -140,6 +139,16 @@ def _edge_terms_error_kernel(otf, weights, error_weights, abscissa, ifov):
         n = RER_POSITIONS.size
         return (er[..., 1] - er[..., 0], _eho_kernel(er[..., n:]), np.abs(d[..., 1] - d[..., 0]),
                 np.abs(d[..., n:]).max(axis=-1))
+
+
+def _edge_tables(abscissa, ifov, cosine: bool):
+    """sin(2 pi f ifov x) / f (and cos(...) / f, or None) at the RER and EHO positions x."""
+    positions = np.concatenate([RER_POSITIONS, EHO_POSITIONS])
+    with np.errstate(all="ignore"):
+        phase = (2.0 * np.pi * abscissa[..., None, :] * np.asarray(ifov)[..., None, None]
+                 * positions[:, None])
+        return (np.sin(phase) / abscissa[..., None, :],
+                np.cos(phase) / abscissa[..., None, :] if cosine else None)
 
 
 def _apply_edge(kernel, otf_slice, weights, *args, n_out=1, **knobs):
@@ -387,6 +396,11 @@ def slice_terms_arrays(filtered, unfiltered, weights, abscissa, ifov, edge_otf: 
     the weights' axes: a rule's embedded error estimate), also ``edge_error``: the NIIRS
     error that estimate allows in any GIQE (``_niirs_error_bound``).
     """
+    tables = None
+    if error_weights is not None:  # one sine (and cosine) table for both OTFs
+        tables = _edge_tables(abscissa[..., None, :], ifov, cosine=edge_otf != "abs" and (
+            np.iscomplexobj(filtered) or np.iscomplexobj(unfiltered)))
+
     def edge(system):
         system = np.abs(system) if edge_otf == "abs" else system
         if error_weights is None:
@@ -394,7 +408,7 @@ def slice_terms_arrays(filtered, unfiltered, weights, abscissa, ifov, edge_otf: 
                                       abscissa[..., None, :], ifov)
         return _edge_terms_error_kernel(np.swapaxes(system, -1, -2), weights[..., None, :],
                                         error_weights[..., None, :], abscissa[..., None, :],
-                                        ifov)
+                                        ifov, tables)
 
     rer, eho, *errors = edge(filtered)
     rer_x, rer_y, eho_x, eho_y = rer[..., 0], rer[..., 1], eho[..., 0], eho[..., 1]

@@ -89,6 +89,8 @@ def circular_aperture_kernel(radial, aperture_diameter, wavelength, obscuration_
     eta = np.asarray(obscuration_ratio, dtype=float)
     if not np.any(eta > 0):
         return _diffraction_term(nu) + np.zeros_like(eta)  # exact: adds 0 and eta's axes
+    if eta.size == 1:
+        return _one_obscuration(nu, eta)
     nu, eta = np.broadcast_arrays(nu, eta)
     out = np.zeros(nu.shape)
     inside = ~(nu >= 1.0)  # NaN stays inside, and stays NaN
@@ -104,6 +106,32 @@ def circular_aperture_kernel(radial, aperture_diameter, wavelength, obscuration_
     overlap[band] = _annulus_transition(nu[band], eta[band])
     out[inside] = (_diffraction_term(nu) + inner + overlap) / (1.0 - eta2)
     return out
+
+
+def _one_obscuration(nu, eta):
+    """:func:`circular_aperture_kernel` for one obscuration ratio 0 < ``eta`` < 1 (one value).
+
+    The same values, without gathering the entries each term needs (the gathers cost more
+    than the arithmetic they save): the central obscuration's term is evaluated everywhere,
+    as it is exactly 0 where nu / eta >= 1 (the clipped argument is 1), and so is every term
+    at or beyond the cutoff; only the annulus overlap's transcendentals are evaluated on
+    their own entries. Every value equals the general path's to the bit.
+    """
+    shape = np.broadcast_shapes(np.shape(nu), eta.shape)
+    nu = np.asarray(nu, dtype=float)
+    nu = nu.reshape(nu.shape or (1,))
+    # one-element arrays, not scalars: eta**2 is then numpy's square loop, as on the array
+    eta, eta1 = eta.reshape((1,) * max(nu.ndim, 1)), eta.reshape(1)
+    eta2 = eta**2
+    out = _diffraction_term(nu)
+    out = out + eta2 * _diffraction_term(nu / eta)
+    below = nu < (1.0 - eta) / 2.0
+    overlap = np.where(below, -2.0 * eta2, 0.0)
+    band = ~below & (nu <= (1.0 + eta) / 2.0)
+    overlap[band] = _annulus_transition(nu[band], eta1)
+    out += overlap
+    out /= 1.0 - eta2
+    return out.reshape(shape)
 
 
 def _annulus_transition(nu, eta):

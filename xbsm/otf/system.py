@@ -249,6 +249,23 @@ def _wavefront_band_kernel(variance, variance_wavelength, fx, length_x, fy, leng
     return np.einsum("...k,...k->...", mono, w)
 
 
+def _wavefront_slices(p, nodes, wl, w):
+    """:func:`_wavefront_band_kernel` on the x and y slices: (frequency, orientation) (numpy).
+
+    Each slice on its own 1-D nodes (on the x slice fy = 0, on the y slice fx = 0, so each
+    holds half the (node, wavelength) values of the pair); one evaluation for both where
+    the correlation lengths are equal (the slices are then equal to the bit: (f/L)^2 + 0
+    and 0 + (f/L)^2).
+    """
+    variance, reference = p["wavefront_variance"], p["wavefront_wavelength"]
+    length_x, length_y = p["wavefront_correlation_length_x"], p["wavefront_correlation_length_y"]
+    x = _wavefront_band_kernel(variance, reference, nodes, length_x, 0.0, length_y, wl, w)
+    if np.array_equal(length_x, length_y):
+        return np.stack([x, x], axis=-1)
+    y = _wavefront_band_kernel(variance, reference, 0.0, length_x, nodes, length_y, wl, w)
+    return np.stack([x, y], axis=-1)
+
+
 def _exposure_drift_kernel(drift_rate_x, integration_time, tdi_stages, fx, drift_rate_y, fy):
     """Drift OTF over the exposure of all TDI stages (numpy)."""
     exposure = integration_time * tdi_stages
@@ -387,9 +404,7 @@ def system_slice_arrays(p, nodes, wavelength, spectral_weights, integration_time
         jitter_kernel(p["jitter_x"], fx, p["jitter_y"], fy),
         _exposure_drift_kernel(p["drift_rate_x"], integration_time, p["tdi_stages"], fx,
                                p["drift_rate_y"], fy),
-        _wavefront_band_kernel(p["wavefront_variance"], p["wavefront_wavelength"], fx,
-                               p["wavefront_correlation_length_x"], fy,
-                               p["wavefront_correlation_length_y"], wl, w)]
+        _wavefront_slices(p, nodes, wl, w)]
     unfiltered = _product_kernel(*(r[:, None] for r in radial), *sliced)
     r0 = _band_r0_kernel(cn2, r0_ref, wl, w)
     return unfiltered, unfiltered * _filter_arrays(p, fx, fy, method), r0
