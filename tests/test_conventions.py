@@ -204,6 +204,10 @@ NOT_LABELLED = MappingProxyType({
     "xbsm.metrics.acquisition.minimum_resolvable_kernel": "a kernel: plain numpy arrays in "
     "and out (labelled by minimum_resolvable)",
     "xbsm.otf.system.spectral_bins": "internal binning of the polychromatic OTF",
+    "xbsm.otf.system.binning_error_kernel": "a kernel: plain numpy arrays in and out (the "
+    "chain's flag criterion; tests/metrics/test_edge_reference.py checks it)",
+    "xbsm.metrics.edge.binning_niirs_error": "plain arithmetic on the chain's RERs (a flag "
+    "criterion, not a result variable)",
     "xbsm.metrics.edge.check_slice": "a validator: raises or returns None",
     "xbsm.otf.spectral.is_lazy": "returns a bool",
     **{f"xbsm.otf.{name}": "a kernel: plain numpy arrays in and out, composed by "

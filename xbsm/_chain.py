@@ -30,7 +30,7 @@ import xarray as xr
 
 from . import flags as fl
 from . import geometry, noise, params, quadrature, radiometry
-from ._kernels import apply_orchestrator
+from ._kernels import apply_kernel, apply_orchestrator
 from ._metadata import Output, dataset_of, declared, outputs, result
 from .atmosphere import WAVELENGTH_ATTRS, band_atmosphere, band_atmosphere_arrays
 from .metrics import acquisition
@@ -147,8 +147,12 @@ def _edge_chain(ap, r, atm, optics, view, m) -> dict:
         coarse = ap.undersampled(nodes, cutoff, ifov_x, ifov_y, m.undersampling_threshold)
     flags = ap.flag(ap.no_flags(), "undersampled_grid", coarse)
     if "edge_error" in terms:
-        # the rule's own estimate, both slices through the GIQE's sensitivity (issue 23)
-        unresolved = terms["edge_error"] > m.edge_error_tolerance
+        # the rule's own estimate, both slices through the GIQE's sensitivity (issue 23),
+        # and what the OTF's wavelength bins (otf_wavelengths > 0) may add, which no
+        # quadrature estimate sees
+        binning = edge_.binning_niirs_error(terms["rer_unfiltered_x"],
+                                            terms["rer_unfiltered_y"], otf["binning_error"])
+        unresolved = terms["edge_error"] + binning > m.edge_error_tolerance
         terms = {name: terms[name] for name in terms if name != "edge_error"}
     else:
         # on the worse slice: a one-axis smear leaves the geometric mean above the
@@ -469,10 +473,14 @@ class Labelled:
 
     def system_slices(self, nodes, atm, spectral_weights, integration_time, slant_range, m):
         # the weights carry their wavelengths; ``atm`` is for the direct applier's arrays
-        return system.system_components(
+        otf = system.system_components(
             self.sensor, self.scenario, nodes, spectral_weights=system.otf_weights(
                 spectral_weights), integration_time=integration_time,
             slant_range=slant_range, method=m)
+        binning = apply_kernel(system.binning_error_kernel, spectral_weights,
+                               spectral_weights["wavelength"],
+                               core=[["wavelength"], ["wavelength"]], count=m.otf_wavelengths)
+        return otf.assign(binning_error=binning)
 
     @staticmethod
     def orientations(x, y):
@@ -579,7 +587,10 @@ class Direct:
         unfiltered, filtered, r0 = system.system_slice_arrays(
             self.sensor, nodes, atm["wavelength"], spectral_weights, integration_time,
             slant_range, m)
-        return {"system": filtered, "system_unfiltered": unfiltered, "coherence_diameter": r0}
+        binning = system.binning_error_kernel(spectral_weights, atm["wavelength"],
+                                              count=m.otf_wavelengths)
+        return {"system": filtered, "system_unfiltered": unfiltered, "coherence_diameter": r0,
+                "binning_error": binning}
 
     @staticmethod
     def orientations(x, y):

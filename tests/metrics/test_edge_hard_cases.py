@@ -226,3 +226,41 @@ def test_kinks_move_the_nearest_panel_edge_and_add_panels_only_where_needed():
     for k in kinks[np.isfinite(kinks)] * cutoff:
         straddles = (edges_between.min(axis=1) < k) & (edges_between.max(axis=1) > k)
         assert not straddles.any()
+
+
+def test_fast_flags_where_its_wavelength_bins_may_cost_more_than_its_tolerance():
+    # The one cell of recipes/evidence/preset_error.py where fast's error passed its 1e-2
+    # bound (docs/speed_accuracy.md): the annular MWIR system at Q 73, RER 0.0058, where
+    # GIQE 5 moves 40 NIIRS per unit relative RER error. Its error is fast's 24
+    # wavelength bins, not its quadrature: the same rule with every wavelength is within
+    # 2.4e-5 of accurate; binned, 1.2e-2 (GIQE 5). The Kronrod - Gauss estimate cannot see
+    # that; the bins' own error in the band's mean 1/lambda (binning_error_kernel) does.
+    sensor = xbsm.sensor(aperture_diameter=0.05477, focal_length=9.276, pixel_pitch_x=6.96e-6,
+                         wavelength_min=3e-6, wavelength_max=5e-6, obscuration_ratio=0.4895,
+                         integration_time=9.97e-4, read_noise=10.0, max_well=1e5,
+                         jitter_x=5.836e-8, jitter_y=5.836e-8, drift_rate_x=0.010683,
+                         drift_rate_y=0.000483)
+    scenario = xbsm.scenario(altitude=15056.0, ground_range=54180.0, visibility=23.0)
+    accurate = niirs_quiet(sensor, scenario, "accurate")
+    fast = niirs_quiet(sensor, scenario, "fast")
+    every = niirs_quiet(sensor, scenario, xbsm.method(xbsm.method("fast"), otf_wavelengths=0))
+    assert np.abs(fast.niirs - accurate.niirs).max() > 1e-2 and unresolved(fast)
+    assert np.abs(every.niirs - accurate.niirs).max() < 1e-4 and not unresolved(every)
+    assert not unresolved(accurate)
+
+
+def test_binning_error_is_the_bins_error_in_the_mean_inverse_wavelength():
+    from xbsm.otf.system import binning_error_kernel
+    wavelength = np.linspace(3e-6, 5e-6, 201)
+    weights = wavelength**4  # rising across the band, as a thermal MWIR target's
+    full = np.sum(weights / wavelength) / np.sum(weights)
+    labels = np.minimum(np.arange(201) * 24 // 201, 23)
+    centres = np.array([wavelength[labels == b].mean() for b in range(24)])
+    summed = np.array([weights[labels == b].sum() for b in range(24)])
+    expected = abs(np.sum(summed / centres) / np.sum(weights) / full - 1)
+    got = binning_error_kernel(weights, wavelength, count=24)
+    assert float(got) == pytest.approx(expected, rel=1e-9) and expected > 0
+    assert float(binning_error_kernel(weights, wavelength, count=0)) == 0.0
+    assert float(binning_error_kernel(np.zeros(201), wavelength, count=24)) == 0.0
+    both = binning_error_kernel(np.stack([weights, 2 * weights]), wavelength, count=24)
+    np.testing.assert_allclose(both, [expected, expected], rtol=1e-9)  # e ~ 1e-4: cancellation

@@ -439,6 +439,22 @@ def _quadpack(relative):
         return relative * np.minimum(1.0, (200.0 * relative) ** 1.5)
 
 
+def binning_niirs_error(rer_unfiltered_x, rer_unfiltered_y, relative):
+    r"""Largest NIIRS change (GIQE 3, 4, 5) a relative error common to both slices' RER allows.
+
+    The OTF's wavelength binning (:func:`xbsm.otf.system.binning_error_kernel`) moves the
+    RER of both slices by about the same relative amount :math:`\epsilon`: GIQE 3 and 4
+    change by at most :math:`3.32\,\epsilon/\ln 10`, GIQE 5 by
+    :math:`(3.32 + 8|\log_{10}RER_5|^3)\,\epsilon/\ln 10`, with the sensitivities of
+    ``_niirs_error_bound``. Plain numpy (or DataArray) arithmetic. [NIIRS]
+    """
+    lo = np.minimum(np.abs(rer_unfiltered_x), np.abs(rer_unfiltered_y))
+    hi = np.maximum(np.abs(rer_unfiltered_x), np.abs(rer_unfiltered_y))
+    with np.errstate(all="ignore"):
+        log5 = np.abs(np.log10(np.cbrt(hi * lo * lo)))
+    return (3.32 + 8.0 * log5**3) / _LN10 * relative
+
+
 def _niirs_error_bound(rer, eho, d_rer, d_eho, rer_unfiltered, d_rer_unfiltered):
     r"""Largest NIIRS change (GIQE 3, 4, 5) that edge-term errors of the x and y slices allow.
 
