@@ -78,7 +78,8 @@ FLAGS = MappingProxyType({
     "blur_unresolved": (
         4096,
         "the edge-response quadrature does not resolve the system OTF: its own error "
-        "estimate (Kronrod minus Gauss on both slices, through the GIQE's sensitivity) "
+        "estimate (Kronrod minus Gauss on both slices, through the GIQE's sensitivity, plus "
+        "the error of the OTF's wavelength bins where the method bins them) "
         "allows more NIIRS error than the method's edge_error_tolerance (rules without an "
         "estimate: RER of the worse slice below 0.05); the result may be wrong",
     ),
