@@ -13,7 +13,8 @@ extinction profile, and :mod:`~xbsm.atmosphere.lookup` (:func:`atmosphere_at`,
 :func:`band_atmosphere`, :func:`interpolate_database`); :mod:`~xbsm.atmosphere.tables`
 builds, validates and writes a database file from anyone's tables
 (:func:`from_tables`, :func:`write_database`), and :func:`use_database` makes such a
-file the default inside a ``with`` block. Every public name of those
+file the default inside a ``with`` block; :mod:`~xbsm.atmosphere.sixs` generates such
+files with the open radiative-transfer code 6S (optional extra ``sixs``). Every public name of those
 modules is importable from ``xbsm.atmosphere``, on first use (PEP 562), so that
 :mod:`xbsm.params` and :mod:`xbsm.flags` can read the database's facts without importing
 the interpolation.
@@ -79,6 +80,7 @@ _PUBLIC = {
     "rules": "rules",
     "lookup": "lookup",
     "tables": "tables",
+    "sixs": "sixs",  # the open engine 6S (optional extra 'sixs'); its names stay in it
     **{name: "database" for name in (
         "ALTITUDES", "ALTITUDE_GAP", "ALTITUDE_RANGE", "COMPONENTS", "GROUND_RANGES",
         "GROUND_RANGE_RANGE", "IHAZE", "LONG_NAMES", "SURFACE_REFLECTANCE", "UNITS",

@@ -36,7 +36,9 @@ of 1e-7 in the file's units: coarse for the SWIR path radiance of short paths), 
 returns NaN for the intrinsic path radiance where the Rayleigh optical depth below a low
 aircraft is tiny (below about 200 m, beyond 0.65 um); there the path radiance is 6S's total
 atmospheric reflectance (Stokes I) times ``E0 cos(solar_zenith) / pi`` times the total
-gaseous transmittance (:data:`PATH_FALLBACK`).
+gaseous transmittance (:data:`PATH_FALLBACK`); where that is NaN too (a sensor a few metres
+up) it is the path radiance at :data:`REFERENCE_PLANE` times the ratio of the slant paths'
+scattering, ``1 - exp(-tau / mu)`` (``tau`` the optical depth below each sensor).
 """
 
 from __future__ import annotations
@@ -55,6 +57,7 @@ from ..constants import EARTH_RADIUS
 __all__ = [
     "DEFAULT_WAVELENGTHS",
     "PATH_FALLBACK",
+    "REFERENCE_PLANE",
     "WAVELENGTH_RANGE",
     "SixSSettings",
     "engine_versions",
@@ -68,8 +71,11 @@ WAVELENGTH_RANGE = (0.25e-6, 4.0e-6)
 #: The default wavelength grid: the shipped database's samples from 0.3 to 2.5 um. [m]
 DEFAULT_WAVELENGTHS = 1e-6 * np.linspace(0.3, 2.5, 221)
 #: How the path radiance is made where 6SV1.1 returns NaN for it (a low aircraft).
+#: Sensor altitude whose path radiance is scaled where the fallback is NaN too. [m]
+REFERENCE_PLANE = 100.0
 PATH_FALLBACK = ("atmospheric reflectance I (total) x solar spectrum x cos(solar zenith) / pi "
-                 "x total gaseous transmittance")
+                 "x total gaseous transmittance; where NaN too, the path radiance at 100 m x "
+                 "(1 - exp(-tau / mu)) / (1 - exp(-tau_100m / mu))")
 #: W m-2 sr-1 um-1 (6S) -> W sr-1 cm-2 um-1 (the file).
 _TO_FILE_UNITS = 1e-4
 _ATMOSPHERES = ("Tropical", "MidlatitudeSummer", "MidlatitudeWinter", "SubarcticSummer",
@@ -233,20 +239,21 @@ def _wrapper(settings, altitude, zenith, visibility, aot550):
 
 
 def _run(s, wavelength_um):
-    """One 6S run: (TRANS, path radiance, background radiance, target radiance)."""
+    """One 6S run: (TRANS, path radiance, background and target radiance, plane depth)."""
     from Py6S import Wavelength
 
     s.wavelength = Wavelength(wavelength_um)
     s.run()
     out = s.outputs
     mu = np.cos(np.radians(s.geometry.view_z))
-    trans = out.trans["global_gas"].upward * np.exp(-out.rat["optical_depth_plane"].total / mu)
+    tau = out.rat["optical_depth_plane"].total
+    trans = out.trans["global_gas"].upward * np.exp(-tau / mu)
     values = out.values
     path = values["atmospheric_intrinsic_radiance"]
     if not np.isfinite(path):  # 6SV1.1's NaN Rayleigh term under a low plane
         solar = values["solar_spectrum"] * np.cos(np.radians(s.geometry.solar_z)) / np.pi
         path = out.rat["reflectance_I"].total * solar * out.trans["global_gas"].total
-    return trans, path, values["background_radiance"], values["pixel_radiance"]
+    return trans, path, values["background_radiance"], values["pixel_radiance"], tau
 
 
 def sixs_table(altitude, ground_range, visibility=None, *, aot550=None,
@@ -289,8 +296,15 @@ def sixs_table(altitude, ground_range, visibility=None, *, aot550=None,
     if zenith > settings.max_view_zenith:
         return table
     s = _wrapper(settings, altitude, zenith, visibility, aot550)
+    reference = None
+    mu = np.cos(np.radians(zenith))
     for k, w in enumerate(wavelength * 1e6):
-        trans, path, background, target = _run(s, w)
+        trans, path, background, target, tau = _run(s, w)
+        if not np.isfinite(path):  # a sensor a few metres up: scaled from REFERENCE_PLANE
+            if reference is None:
+                reference = _wrapper(settings, REFERENCE_PLANE, zenith, visibility, aot550)
+            _, path_ref, _, _, tau_ref = _run(reference, w)
+            path = path_ref * np.expm1(-tau / mu) / np.expm1(-tau_ref / mu)
         table[:, k] = (trans, 0.0, 0.0, (path + background) * _TO_FILE_UNITS,
                        target * _TO_FILE_UNITS)
     if not np.isfinite(table).all():
