@@ -129,6 +129,17 @@ def test_path_radiance_where_6s_gives_nan_follows_its_atmospheric_reflectance():
 
 
 @needs_engine
+def test_path_radiance_a_few_metres_up_is_scaled_from_the_reference_plane():
+    # At 2 m 6SV1.1 prints NaN for the reflectance too (measured); the path radiance is the
+    # 100 m one times the ratio of 1 - exp(-tau/mu): finite, positive and below 32.5 m's
+    two = sixs.sixs_table(2.0, 0.0, 23.0, wavelength=[0.55e-6])
+    higher = sixs.sixs_table(32.5, 0.0, 23.0, wavelength=[0.55e-6])
+    assert np.isfinite(two).all()
+    assert 0.0 < two[3, 0] < higher[3, 0]
+    assert higher[0, 0] < two[0, 0] < 1.0
+
+
+@needs_engine
 def test_path_fallback_agrees_with_6s_where_6s_is_finite():
     # Where 6S prints the intrinsic radiance, the fallback formula (PATH_FALLBACK) gives it
     # within 1 % at 0.55 um (outside strong gas bands the two gas couplings agree)
