@@ -24,7 +24,8 @@ At the conditions of the pyBSM paper's Appendix A in 6S's terms
    NIIRS difference (GIQE 5);
 4. times 6S: seconds per run and per table (221 wavelengths, 0.3-2.5 um at 0.01 um),
    and estimates a 20-altitude x 40-range x 3-visibility cube on 2 cores from the
-   measured time per run (the cube itself would take about a day here).
+   measured time per run and from the validation's throughput (the cube itself would take
+   days on this shared machine).
 
 Writes ``docs/benchmarks/engine_validation.json``. Needs the extra ``sixs``. Run from the
 repository root::
@@ -190,8 +191,8 @@ def timing():
             "cube_20x40x3_2_cores_hours_estimated": round(cube_tables * table_s / 2 / 3600, 1),
             "note": "estimated from the median time of one 6S run (aircraft at 9 km, one "
                     "wavelength) times 221 wavelengths a table, over 2 worker threads (each "
-                    "runs the 6S binary in its own process); not run whole (it would take "
-                    "about a day here)",
+                    "runs the 6S binary in its own process); not run whole (days on this "
+                    "shared machine)",
             "load_average_before": [round(x, 2) for x in os.getloadavg()]}
 
 
