@@ -26,8 +26,9 @@ GRND_RFLT
     6S's target radiance: the target's reflected sunlight and skylight, directly
     transmitted to the sensor, for the target reflectance of the settings.
 PTH_THRML, SURF_EMIS
-    Zero: 6S computes no thermal emission (below 2.5 um the shipped MODTRAN tables'
-    path thermal radiance is under 1e-4 of the scattered radiance).
+    Zero: 6S computes no thermal emission (in the shipped MODTRAN tables the path thermal
+    radiance is below 1e-15 of the path radiance under 1 um and up to 1 % of it in the
+    1.0-2.5 um band mean; it grows toward 4 um).
 
 The geometry is plane-parallel (6S): the view zenith is the one at the target on the
 spherical Earth, and tables beyond :attr:`SixSSettings.max_view_zenith` are NaN (no table).
