@@ -185,6 +185,22 @@ def test_generated_database_is_valid_carries_provenance_and_runs_in_snr(tmp_path
 
 
 @needs_engine
+@pytest.mark.parametrize("grid, match", [
+    (dict(altitude=[2000.0, 1000.0], ground_range=[0.0], visibility=[23.0]), "altitude"),
+    (dict(altitude=[1000.0], ground_range=[0.0], visibility=[5.0, 23.0]), "visibility"),
+    (dict(altitude=[1000.0], ground_range=[0.0], aot550=[0.3, 0.1]), "aot550"),
+    (dict(altitude=[1000.0], ground_range=[0.0, 0.0], visibility=[23.0]), "ground_range"),
+])
+def test_a_bad_grid_is_refused_before_any_6s_run(grid, match, tmp_path, monkeypatch):
+    def never(*args):
+        raise AssertionError("6S ran on a grid that cannot be written")
+
+    monkeypatch.setattr(sixs, "_slab", never)
+    with pytest.raises(ValueError, match=match):
+        sixs.generate_database(tmp_path / "x.nc", wavelength=[0.55e-6], **grid)
+
+
+@needs_engine
 def test_generation_resumes_from_the_finished_chunks(tmp_path, monkeypatch):
     grid = dict(altitude=[1000.0, 2000.0], ground_range=[0.0], visibility=[23.0],
                 wavelength=[0.55e-6, 0.65e-6])

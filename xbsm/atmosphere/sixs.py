@@ -412,6 +412,15 @@ def generate_database(path, *, altitude, ground_range, visibility=None, aot550=N
     wavelength = np.asarray(wavelength, dtype=np.float64)
     if not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be an integer >= 1; got {workers!r}")
+    # the grid's errors now, not after hours of 6S: an empty cube on it must validate
+    placeholder = np.arange(len(conditions), 0, -1.0) if aot550 is not None else conditions
+    if aot550 is not None and not (np.diff(conditions) > 0).all():
+        raise ValueError(f"aot550 must be strictly increasing; got {conditions}")
+    from_tables(np.full((len(conditions), altitude.size, ground_range.size, 5,
+                         wavelength.size), np.nan),
+                visibility=placeholder, altitude=altitude, ground_range=ground_range,
+                wavelength=wavelength, attrs={"title": "", "source": "",
+                                              "surface_reflectance_of_database": 0.15})
     path = Path(path)
     work = Path(work_dir) if work_dir is not None else path.with_name(path.name + ".parts")
     record = {"altitude": altitude.tolist(), "ground_range": ground_range.tolist(),
