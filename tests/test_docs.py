@@ -30,6 +30,7 @@ API_MODULES = (
     "xbsm.params", "xbsm.pybsm_compat", "xbsm.methods", "xbsm.model", "xbsm.simulate",
     "xbsm.atmosphere", "xbsm.atmosphere.database", "xbsm.atmosphere.rules",
     "xbsm.atmosphere.lookup", "xbsm.atmosphere.tables", "xbsm.atmosphere.modtran",
+    "xbsm.atmosphere.sixs",
     "xbsm.geometry", "xbsm.radiometry", "xbsm.noise", "xbsm.quadrature", "xbsm.metrics",
     "xbsm.metrics.edge", "xbsm.metrics.grd", "xbsm.metrics.giqe", "xbsm.metrics.pybsm_numerics",
     "xbsm.flags", "xbsm.examples", "xbsm.plot.axes", "xbsm.plot.figures", "xbsm.cli",

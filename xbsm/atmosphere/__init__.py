@@ -15,8 +15,10 @@ builds, validates and writes a database file from anyone's tables
 (:func:`from_tables`, :func:`write_database`), and :func:`use_database` makes such a
 file the default inside a ``with`` block; :mod:`~xbsm.atmosphere.modtran` reads MODTRAN's
 tape7 / ``.7sc`` outputs into such tables and writes the MODTRAN 6 JSON cases of a grid
-(:func:`read_tape7`, :func:`tables_from_runs`, :func:`modtran_inputs`). Every public name of those
-modules is importable from ``xbsm.atmosphere``, on first use (PEP 562), so that
+(:func:`read_tape7`, :func:`tables_from_runs`, :func:`modtran_inputs`); and
+:mod:`~xbsm.atmosphere.sixs` generates such files with the open radiative-transfer code 6S
+(optional extra ``sixs``; its names stay in that submodule). Every public name of the
+other modules is importable from ``xbsm.atmosphere``, on first use (PEP 562), so that
 :mod:`xbsm.params` and :mod:`xbsm.flags` can read the database's facts without importing
 the interpolation.
 
@@ -90,6 +92,7 @@ _PUBLIC = {
     "lookup": "lookup",
     "tables": "tables",
     "modtran": "modtran",
+    "sixs": "sixs",  # the open engine 6S (optional extra 'sixs'); its names stay in it
     **{name: "database" for name in (
         "ALTITUDES", "ALTITUDE_GAP", "ALTITUDE_RANGE", "COMPONENTS", "GROUND_RANGES",
         "GROUND_RANGE_RANGE", "IHAZE", "LONG_NAMES", "SURFACE_REFLECTANCE", "UNITS",
