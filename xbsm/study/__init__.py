@@ -10,8 +10,8 @@ over its sweep: ``xbsm.study.simulate(study)``, the ``xbsm simulate`` command
 """
 
 from .build import chunk_sizes, run
-from .images import simulate
 from .goals import GIQE5_STANDARD_ERROR, max_range, min_parameter, probability_meets
+from .images import simulate
 from .spec import Study, StudyError, Sweep, load, parse
 from .store import write
 

@@ -18,11 +18,11 @@ that exists is complete.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import itertools
 import json
 import math
-import functools
 import os
 import warnings
 from dataclasses import asdict, dataclass
