@@ -118,11 +118,81 @@ def _channels(array: np.ndarray, path) -> np.ndarray:
     return array
 
 
+def _png_header(path: Path):
+    """(bit depth, colour type, interlace) of a PNG file, or None if it is not one."""
+    with open(path, "rb") as handle:
+        head = handle.read(29)
+    if len(head) < 29 or head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+        return None
+    return head[24], head[25], head[28]
+
+
+def _unfilter(lines: np.ndarray, bpp: int) -> np.ndarray:
+    """PNG filters undone (ISO/IEC 15948 Sec. 9): rows of (1 filter byte + data)."""
+    rows, width = lines.shape[0], lines.shape[1] - 1
+    out = np.zeros((rows, width), np.uint8)
+    previous = np.zeros(width, np.int64)
+    for r in range(rows):
+        kind, row = lines[r, 0], lines[r, 1:].astype(np.int64)
+        if kind == 0:
+            cur = row
+        elif kind == 1:  # Sub: a running sum per byte of a pixel
+            cur = np.cumsum(row.reshape(-1, bpp), axis=0).ravel() % 256
+        elif kind == 2:  # Up
+            cur = (row + previous) % 256
+        elif kind in (3, 4):  # Average, Paeth: each pixel depends on the one left of it
+            cur = row.copy()
+            for i in range(0, width, bpp):
+                a = cur[i - bpp:i] if i else np.zeros(bpp, np.int64)
+                b = previous[i:i + bpp]
+                if kind == 3:
+                    cur[i:i + bpp] = (cur[i:i + bpp] + (a + b) // 2) % 256
+                else:
+                    c = previous[i - bpp:i] if i else np.zeros(bpp, np.int64)
+                    p = a + b - c
+                    pa, pb, pc = np.abs(p - a), np.abs(p - b), np.abs(p - c)
+                    pred = np.where((pa <= pb) & (pa <= pc), a, np.where(pb <= pc, b, c))
+                    cur[i:i + bpp] = (cur[i:i + bpp] + pred) % 256
+        else:
+            raise ValueError(f"unknown PNG filter type {kind}")
+        out[r] = cur
+        previous = cur
+    return out
+
+
+def _read_png_rgb16(path: Path) -> np.ndarray:
+    """A 16-bit RGB(A) PNG (Pillow reads it as 8 bits a channel): (rows, columns, 3|4) uint16."""
+    import struct
+    import zlib
+
+    data = path.read_bytes()
+    pos, idat, header = 8, [], None
+    while pos + 8 <= len(data):
+        length, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + length]
+        if kind == b"IHDR":
+            header = struct.unpack(">IIBBBBB", body)
+        elif kind == b"IDAT":
+            idat.append(body)
+        elif kind == b"IEND":
+            break
+        pos += 12 + length
+    cols, rows, _, colour, _, _, interlace = header
+    if interlace:
+        raise ValueError("interlaced 16-bit RGB PNG (save it without interlacing or as TIFF)")
+    channels = 3 if colour == 2 else 4
+    raw = np.frombuffer(zlib.decompress(b"".join(idat)), np.uint8)
+    lines = raw.reshape(rows, 1 + cols * channels * 2)
+    pixels = _unfilter(lines, channels * 2)
+    return pixels.view(">u2").reshape(rows, cols, channels).astype(np.uint16)
+
+
 def read_pixels(path) -> np.ndarray:
     """An image file's pixel values: (rows, columns) grey or (rows, columns, 3) colour.
 
-    PNG, JPEG and BMP through Pillow (8- and 16-bit grey, RGB, RGBA; a palette image
-    as RGB), TIFF through tifffile (any integer or float dtype). An alpha channel is
+    PNG, JPEG and BMP through Pillow (8- and 16-bit grey, 8-bit RGB and RGBA; a palette
+    image as RGB), 16-bit RGB(A) PNG here (Pillow reads it as 8 bits a channel), TIFF
+    through tifffile (any integer or float dtype). An alpha channel is
     dropped.
 
     Raises
@@ -136,6 +206,8 @@ def read_pixels(path) -> np.ndarray:
     try:
         if path.suffix.lower() in (".tif", ".tiff"):
             array = _tiff(path).imread(path)
+        elif (_png_header(path) or (0, 0, 0))[:2] in ((16, 2), (16, 6)):
+            array = _read_png_rgb16(path)
         else:
             with _pil(path).open(path) as img:
                 if img.mode in ("P", "PA", "1", "CMYK", "YCbCr", "LAB", "HSV"):

@@ -333,6 +333,8 @@ def _run_chunk(chunk: int, positions, dataset, cells, spec, method, out: Path, s
                                                      "scale_x", "offset_x", "scale_y",
                                                      "offset_y")},
                     "flags": code, "flag_names": _flag_names(code)}})
+        if INTERRUPTED.is_set():
+            return chunk
         progress.add(len(cells))
     writers.write_json(_record_file(state, chunk), {"fingerprint": digest, "chunk": chunk,
                                                      "outputs": outputs})
@@ -433,7 +435,8 @@ def _assemble(out, state, spec, dataset, cells, chunks, study, say) -> None:
             for cell in cells:
                 stop_if_interrupted()
                 doc = {"info": {"description": f"{study.title or 'xbsm'}: {cell.name}",
-                                "source": dataset.source, "xbsm_scenario": cell.labels},
+                                "source": Path(dataset.source).name,
+                                "xbsm_scenario": cell.labels},
                        "images": per_cell[cell.index]["images"],
                        "annotations": per_cell[cell.index]["annotations"],
                        "categories": categories}
