@@ -10,6 +10,7 @@ which Pillow cannot write at 16 bits per colour channel); TIFF through tifffile.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import struct
@@ -18,7 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["FORMATS", "TEMP_PREFIX", "atomic_write", "encode_png", "write_image", "write_json"]
+__all__ = ["FORMATS", "TEMP_PREFIX", "atomic_file", "atomic_write", "encode_png", "write_image",
+           "write_json"]
 
 #: Image formats and their file suffixes.
 FORMATS = {"png": ".png", "tiff": ".tif"}
@@ -26,20 +28,32 @@ FORMATS = {"png": ".png", "tiff": ".tif"}
 TEMP_PREFIX = ".xbsm-partial-"
 
 
-def atomic_write(path, data: bytes) -> Path:
-    """Write ``data`` to ``path`` whole or not at all (temporary file, fsync, os.replace)."""
+@contextlib.contextmanager
+def atomic_file(path, mode: str = "w"):
+    """A file opened under a temporary name, renamed onto ``path`` only when the block ends.
+
+    Text (UTF-8) with ``mode="w"``, bytes with ``"wb"``. The data is flushed and synced
+    before :func:`os.replace`; an exception (a signal) removes the temporary file and
+    leaves ``path`` as it was.
+    """
     path = Path(path)
     temp = path.with_name(f"{TEMP_PREFIX}{os.getpid()}-{path.name}")
     try:
-        with open(temp, "wb") as handle:
-            handle.write(data)
+        with open(temp, mode, **({} if "b" in mode else {"encoding": "utf-8"})) as handle:
+            yield handle
             handle.flush()
             os.fsync(handle.fileno())
         os.replace(temp, path)
     except BaseException:
         temp.unlink(missing_ok=True)
         raise
-    return path
+
+
+def atomic_write(path, data: bytes) -> Path:
+    """Write ``data`` to ``path`` whole or not at all (temporary file, fsync, os.replace)."""
+    with atomic_file(path, "wb") as handle:
+        handle.write(data)
+    return Path(path)
 
 
 def _chunk(kind: bytes, data: bytes) -> bytes:

@@ -399,53 +399,85 @@ def _categories(dataset) -> list:
     return []
 
 
-def _assemble(out, state, spec, dataset, cells, chunks, study, say) -> None:
-    """The COCO file of every scenario (and the NetCDF table) from the chunk records."""
-    per_cell = {cell.index: {"images": [], "annotations": []} for cell in cells}
-    rows = []
-    dropped = False
+def _records(state: Path, chunks: int):
+    """Every output's record, chunk by chunk (one chunk's records in memory at a time)."""
     for chunk in range(chunks):
-        record = json.loads(_record_file(state, chunk).read_text(encoding="utf-8"))
-        for entry in record["outputs"]:
-            target = per_cell[entry["cell"]]
-            image_id = dataset[entry["position"]].id
+        yield from json.loads(_record_file(state, chunk).read_text(encoding="utf-8"))["outputs"]
+
+
+def _coco_items(state, chunks, spec, dataset, cell, what: str):
+    """The COCO ``images`` or ``annotations`` of one scenario, one JSON text at a time."""
+    next_id = 1
+    for entry in _records(state, chunks):
+        if entry["cell"] != cell.index:
+            continue
+        image_id = dataset[entry["position"]].id
+        if what == "images":
             # relative to the COCO file's folder (the scenario's folder, or the output's)
             name = entry["file_name"]
             if spec.layout != "flat":
                 name = name.split("/", 1)[1]
-            target["images"].append({"id": image_id, "file_name": name, "width": entry["width"],
-                                     "height": entry["height"], "xbsm": entry["xbsm"]})
-            first = len(target["annotations"]) + 1
-            for k, ann in enumerate(entry["annotations"]):
-                target["annotations"].append({**ann, "id": first + k, "image_id": image_id})
-            dropped |= entry["rle_dropped"]
-            rows.append(entry)
-    upsampled = sum("upsampled" in entry["xbsm"]["flag_names"] for entry in rows)
+            yield _json({"id": image_id, "file_name": name, "width": entry["width"],
+                         "height": entry["height"], "xbsm": entry["xbsm"]})
+            continue
+        for ann in entry["annotations"]:
+            yield _json({**ann, "id": next_id, "image_id": image_id})
+            next_id += 1
+
+
+def _json(doc) -> str:
+    return json.dumps(doc, allow_nan=False, separators=(",", ":"))
+
+
+def _write_coco(path: Path, head: dict, parts) -> None:
+    """A COCO file written as it is read from the records, whole or not at all."""
+    with writers.atomic_file(path) as handle:
+        handle.write(_json(head)[:-1])
+        for key, texts in parts:
+            handle.write(f',"{key}":[')
+            for k, text in enumerate(texts):
+                handle.write(("," if k else "") + text)
+            handle.write("]")
+        handle.write("}")
+
+
+def _assemble(out, state, spec, dataset, cells, chunks, study, say) -> None:
+    """The COCO file of every scenario (and the NetCDF table) from the chunk records.
+
+    The records are read from disk again for each file, so memory holds one chunk's
+    records, not the dataset's.
+    """
+    upsampled = dropped = total = 0
+    for entry in _records(state, chunks):
+        total += 1
+        upsampled += "upsampled" in entry["xbsm"]["flag_names"]
+        dropped += entry["rle_dropped"]
     if upsampled:
-        warnings.warn(f"{upsampled} of {len(rows)} simulated images are more finely sampled "
+        warnings.warn(f"{upsampled} of {total} simulated images are more finely sampled "
                       "than their reference image (flag 'upsampled' in their metadata): the "
                       "camera is better than the reference, so they lack detail it would "
                       "record", UserWarning, stacklevel=3)
     if dropped:
         say("xbsm simulate: run-length (RLE) masks cannot be moved to the simulated images; "
             "their annotations keep their moved boxes without a segmentation")
-    categories = _categories(dataset)
+    categories = _json(_categories(dataset))
     with deferred():  # a signal waits for the file being written, then stops the run
         if spec.coco:
             for cell in cells:
                 stop_if_interrupted()
-                doc = {"info": {"description": f"{study.title or 'xbsm'}: {cell.name}",
-                                "source": Path(dataset.source).name,
-                                "xbsm_scenario": cell.labels},
-                       "images": per_cell[cell.index]["images"],
-                       "annotations": per_cell[cell.index]["annotations"],
-                       "categories": categories}
+                head = {"info": {"description": f"{study.title or 'xbsm'}: {cell.name}",
+                                 "source": Path(dataset.source).name,
+                                 "xbsm_scenario": cell.labels}}
                 path = out / _coco_name(spec, cell)
                 path.parent.mkdir(parents=True, exist_ok=True)
-                writers.write_json(path, doc)
+                _write_coco(path, head, [
+                    ("images", _coco_items(state, chunks, spec, dataset, cell, "images")),
+                    ("annotations", _coco_items(state, chunks, spec, dataset, cell,
+                                                "annotations")),
+                    ("categories", iter([categories[1:-1]] if categories != "[]" else []))])
         if spec.netcdf:
             stop_if_interrupted()
-            _write_table(out / spec.netcdf, rows, dataset, cells, study)
+            _write_table(out / spec.netcdf, _records(state, chunks), dataset, cells, study)
 
 
 def _write_table(path: Path, rows, dataset, cells, study) -> None:
