@@ -39,7 +39,8 @@ API_MODULES = (
     "xbsm.otf.turbulence", "xbsm.otf.user", "xbsm.otf.wavefront",
     "xbsm.measure.slanted_edge", "xbsm.measure.flat_region",
     "xbsm.study.spec", "xbsm.study.build", "xbsm.study.store", "xbsm.study.goals",
-    "xbsm.study.attributes",
+    "xbsm.study.attributes", "xbsm.study.images",
+    "xbsm.datasets.readers", "xbsm.datasets.writers", "xbsm.datasets.coco",
     "xbsm.interrupts",
     *(f"xbsm.simulate.{m}" for m in (
         "image", "options", "reflectance", "photoelectrons", "sampling", "psf", "pybsm_psf",

@@ -1,9 +1,11 @@
-"""The ``xbsm`` command: ``run``, ``plot``, ``info`` (and ``olson``, an alias of ``run``).
+"""The ``xbsm`` command: ``run``, ``simulate``, ``plot``, ``info`` (``olson``: ``run``'s alias).
 
 ``xbsm run [STUDY.toml] [-o OUT.nc]`` runs a study file (by default the
 paper's first worked example, shipped with the package) lazily in chunks,
 writes the NetCDF safely (one run per output; an interrupted run resumes; the
 output appears only when complete) and draws the standard figures. ``xbsm
+simulate STUDY.toml [-o FOLDER]`` simulates the image dataset of a study's
+``[dataset]`` table at every scenario of its sweep (resumable the same way). ``xbsm
 plot OUT.nc`` draws the figures of any result file; ``xbsm info`` prints the
 atmosphere database's coverage, the method presets and the versions.
 
@@ -70,6 +72,20 @@ def run(study_file: Path | None, out: Path | None, *, overwrite=False, scheduler
     if figures:
         _draw_or_warn(out, _figure_dir(out))
     return out
+
+
+def simulate(study_file: Path, out: Path | None, *, overwrite=False, workers=None,
+             progress=True) -> Path:
+    """Load a study with a ``[dataset]`` table and simulate its dataset; return the folder."""
+    from . import study
+
+    spec = study.load(study_file)
+    if spec.dataset is None:
+        raise study.StudyError(f"{study_file} has no [dataset] table; `xbsm simulate` needs one "
+                               "(docs/datasets.md); `xbsm run` runs other studies")
+    folder = study.simulate(spec, out, overwrite=overwrite, workers=workers, progress=progress)
+    print(f"wrote {folder}")
+    return folder
 
 
 def _open_result(result_file: Path):
@@ -174,6 +190,14 @@ def _parser() -> argparse.ArgumentParser:
     run_.add_argument("--atmosphere", type=Path, metavar="FILE",
                       help="atmosphere database file for the whole study (default: the "
                            "shipped one); see docs/atmosphere.md")
+    sim = sub.add_parser("simulate", help="simulate a study's image dataset ([dataset] table) "
+                         "at every scenario of its sweep")
+    sim.add_argument("study", type=Path, help="study file (TOML) with a [dataset] table; see "
+                     "docs/datasets.md")
+    sim.add_argument("-o", "--out", type=Path, help="output folder (default: the table's output)")
+    sim.add_argument("--overwrite", action="store_true",
+                     help="compute again and replace a finished run's outputs")
+    sim.add_argument("--workers", type=int, help="threads (default: the study's)")
     plot_ = sub.add_parser("plot", help="the standard figures of a result file")
     plot_.add_argument("result", type=Path, help="a NetCDF file written by xbsm run")
     plot_.add_argument("--out", type=Path, help="directory (default: next to the file)")
@@ -192,6 +216,10 @@ def _command(parser, args) -> None:
             parser.error(f"--workers must be >= 1; got {args.workers}")
         run(args.study, args.out, overwrite=args.overwrite, scheduler=args.scheduler,
             workers=args.workers, figures=not args.no_figures, atmosphere=args.atmosphere)
+    elif args.command == "simulate":
+        if args.workers is not None and args.workers < 1:
+            parser.error(f"--workers must be >= 1; got {args.workers}")
+        simulate(args.study, args.out, overwrite=args.overwrite, workers=args.workers)
     elif args.command == "olson":
         if args.out.exists() and not args.out.is_dir():
             parser.error(f"--out {args.out} exists and is not a directory")

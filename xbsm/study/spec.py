@@ -63,6 +63,7 @@ from ._values import (
     fixed_parameters,
     sweep_values,
 )
+from .images import dataset_section
 
 __all__ = ["BAND_PARAMETERS", "MAX_SCENARIOS", "MAX_STUDY_BYTES", "MAX_SWEEP_VALUES",
            "MTF_VARIABLES", "NIIRS_VARIABLES", "OUTPUT_GROUPS", "PARAMETERS", "RANGE_KEYS",
@@ -72,7 +73,7 @@ __all__ = ["BAND_PARAMETERS", "MAX_SCENARIOS", "MAX_STUDY_BYTES", "MAX_SWEEP_VAL
 #: The largest study file read (a guard against passing a data file by mistake). [bytes]
 MAX_STUDY_BYTES = 10 * 2**20
 TOP_KEYS = ("title", "description", "sensor", "bands", "scenario", "sweep", "method",
-            "outputs", "run")
+            "outputs", "run", "dataset")
 #: Names a paired sweep's dimension may not take: xbsm's own and the study's ``band``.
 RESERVED_DIMS = (*params.RESERVED_DIMS, "band")
 
@@ -116,6 +117,7 @@ class Study:
     text: str = dataclasses.field(repr=False, default="")
     variables: tuple = ()  # the output variables kept ([outputs] variables); empty: all
     compress: int = 0  # zlib level of the data variables in the NetCDF file; 0: none
+    dataset: object = None  # the [dataset] table (xbsm.study.images.DatasetSpec), or None
 
     @property
     def sizes(self) -> dict:
@@ -173,6 +175,11 @@ def _summary(study: Study) -> list:
     lines.append(f"  run:       {study.scheduler}, {study.workers} worker(s)"
                  + (f", output {study.output}" if study.output else "")
                  + (f", zlib level {study.compress}" if study.compress else ""))
+    if study.dataset is not None:
+        spec = study.dataset
+        lines.append(f"  dataset:   {spec.input} -> {spec.output or '(-o FOLDER)'} "
+                     f"({spec.format}, {spec.values}, {spec.out_dtype}, {spec.layout}, "
+                     f"{spec.chunk_images} images per chunk)")
     return lines
 
 
@@ -267,7 +274,7 @@ def parse(text: str, name: str = "<study>") -> Study:
                   scenario=MappingProxyType(scenario), sweeps=sweeps, method=method,
                   knobs=MappingProxyType(knobs), outputs=outputs, mtf_frequency=frequency,
                   title=doc.get("title", ""), text=text, variables=variables,
-                  **run_options(src, doc, dims))
+                  dataset=dataset_section(src, doc), **run_options(src, doc, dims))
     check_model_inputs(src, study)
     return study
 
