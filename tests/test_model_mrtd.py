@@ -17,15 +17,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import xbsm
+from xbsm.examples import INFRARED_CAMERAS
 from xbsm.flags import has_flag
 from xbsm.otf import system
 
 # the MWIR camera of tests/test_model_netd.py (the 3-5 um, f/4, 15 um pitch)
-MWIR = dict(aperture_diameter=0.05, focal_length=0.2, pixel_pitch_x=15e-6,
-            wavelength_min=3e-6, wavelength_max=5e-6, quantum_efficiency=0.8,
-            optics_transmission=0.8, integration_time=2e-3, read_noise=100.0,
-            max_well=1.1e7, bit_depth=14.0, dark_current=1e4, cold_shield_temperature=77.0,
-            cold_filter_temperature=77.0)
+MWIR = dict(INFRARED_CAMERAS["mwir"])  # xbsm.examples
 # a rectangular-pixel LWIR camera, so that the two orientations differ
 LWIR = dict(aperture_diameter=0.1, focal_length=0.2, pixel_pitch_x=17e-6,
             pixel_pitch_y=25e-6, wavelength_min=8e-6, wavelength_max=12e-6,

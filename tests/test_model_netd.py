@@ -19,17 +19,14 @@ from scipy.integrate import quad
 
 import xbsm
 from xbsm import radiometry
+from xbsm.examples import INFRARED_CAMERAS
 from xbsm.flags import has_flag
 
 H, C, K = const.h, const.c, const.k
 
 # the MWIR camera (3-5 um, f/4, 15 um pitch); the other values are typical of a
 # cooled InSb staring array and are this test's choice (reported in docs/infrared.md)
-MWIR = dict(aperture_diameter=0.05, focal_length=0.2, pixel_pitch_x=15e-6,
-            wavelength_min=3e-6, wavelength_max=5e-6, quantum_efficiency=0.8,
-            optics_transmission=0.8, integration_time=2e-3, read_noise=100.0,
-            max_well=1.1e7, bit_depth=14.0, dark_current=1e4, cold_shield_temperature=77.0,
-            cold_filter_temperature=77.0)
+MWIR = dict(INFRARED_CAMERAS["mwir"])  # xbsm.examples
 LAB = dict(altitude=2.0, ground_range=0.0, visibility=23.0)  # a 2 m path: the shortest
 
 
@@ -270,11 +267,7 @@ def test_background_limited_netd_matches_the_textbook_detectivity_form(band, f_n
     assert float(out["netd"]) / textbook - 1 > 0.007
 
 
-LWIR = dict(aperture_diameter=0.1, focal_length=0.2, pixel_pitch_x=17e-6,
-            wavelength_min=8e-6, wavelength_max=12e-6, quantum_efficiency=0.6,
-            optics_transmission=0.8, integration_time=1e-4, read_noise=500.0,
-            max_well=2e7, bit_depth=14.0, dark_current=1e6, cold_shield_temperature=77.0,
-            cold_filter_temperature=77.0)
+LWIR = dict(INFRARED_CAMERAS["lwir"])  # xbsm.examples
 
 
 @pytest.mark.parametrize("camera", [MWIR, LWIR], ids=["mwir", "lwir"])

@@ -2,7 +2,8 @@
 
 :func:`olson_sensor` is the full-motion-video camera of the paper's Sec. 3
 (Olson; Table 2), :func:`olson_scenario` its 9 km flight over every database
-ground range and both visibilities.
+ground range and both visibilities; :func:`infrared_sensor` the cooled MWIR and LWIR
+cameras of the infrared guide (docs/infrared.md).
 """
 
 from __future__ import annotations
@@ -109,3 +110,44 @@ def olson_scenario(ground_range=None, visibility=None, **overrides) -> xr.Datase
                   platform_speed=100.0)
     params.update(overrides)
     return scenario(**params)
+
+
+INFRARED_CAMERAS = MappingProxyType({
+    # issue 25's first trial: 3-5 um, f/4, 15 um pitch; the other values are typical of a
+    # cooled InSb staring array (the guide's choice, stated in docs/infrared.md)
+    "mwir": MappingProxyType(dict(
+        aperture_diameter=0.05, focal_length=0.2, pixel_pitch_x=15e-6,
+        wavelength_min=3e-6, wavelength_max=5e-6, quantum_efficiency=0.8,
+        optics_transmission=0.8, integration_time=2e-3, read_noise=100.0, max_well=1.1e7,
+        bit_depth=14.0, dark_current=1e4, cold_shield_temperature=77.0,
+        cold_filter_temperature=77.0)),
+    # 8-12 um, f/2, 17 um pitch: a cooled HgCdTe array, short exposure for the large flux
+    "lwir": MappingProxyType(dict(
+        aperture_diameter=0.1, focal_length=0.2, pixel_pitch_x=17e-6,
+        wavelength_min=8e-6, wavelength_max=12e-6, quantum_efficiency=0.6,
+        optics_transmission=0.8, integration_time=1e-4, read_noise=500.0, max_well=2e7,
+        bit_depth=14.0, dark_current=1e6, cold_shield_temperature=77.0,
+        cold_filter_temperature=77.0)),
+})
+"""The :func:`xbsm.sensor` keywords of the infrared guide's two cameras, by band (SI)."""
+
+
+def infrared_sensor(band: str = "mwir", **overrides) -> xr.Dataset:
+    """The infrared guide's cooled MWIR (3-5 um, f/4) or LWIR (8-12 um, f/2) camera.
+
+    Parameters
+    ----------
+    band : {"mwir", "lwir"}
+        Which of :data:`INFRARED_CAMERAS`.
+    **overrides
+        Any :func:`xbsm.sensor` parameter.
+
+    Returns
+    -------
+    xr.Dataset
+    """
+    if band not in INFRARED_CAMERAS:
+        raise ValueError(f"band must be one of {sorted(INFRARED_CAMERAS)}; got {band!r}")
+    out = sensor(**{**INFRARED_CAMERAS[band], **overrides})
+    out.attrs["name"] = f"infrared guide's {band.upper()} camera (docs/infrared.md)"
+    return out

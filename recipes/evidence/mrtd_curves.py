@@ -24,20 +24,12 @@ import time
 import numpy as np
 
 import xbsm
-from xbsm.examples import olson_scenario, olson_sensor
+from xbsm.examples import INFRARED_CAMERAS, olson_scenario, olson_sensor
 from xbsm.flags import has_flag
 from xbsm.metrics.acquisition import bar_constant
 
-MWIR = dict(aperture_diameter=0.05, focal_length=0.2, pixel_pitch_x=15e-6,
-            wavelength_min=3e-6, wavelength_max=5e-6, quantum_efficiency=0.8,
-            optics_transmission=0.8, integration_time=2e-3, read_noise=100.0,
-            max_well=1.1e7, bit_depth=14.0, dark_current=1e4, cold_shield_temperature=77.0,
-            cold_filter_temperature=77.0)
-LWIR = dict(aperture_diameter=0.1, focal_length=0.2, pixel_pitch_x=17e-6,
-            wavelength_min=8e-6, wavelength_max=12e-6, quantum_efficiency=0.6,
-            optics_transmission=0.8, integration_time=1e-4, read_noise=500.0,
-            max_well=2e7, bit_depth=14.0, dark_current=1e6, cold_shield_temperature=77.0,
-            cold_filter_temperature=77.0)
+MWIR = dict(INFRARED_CAMERAS["mwir"])  # xbsm.examples
+LWIR = dict(INFRARED_CAMERAS["lwir"])  # xbsm.examples
 LAB = dict(altitude=2.0, ground_range=0.0, visibility=23.0)
 CYCLES_PER_MRAD = np.array([0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 10.0])
 

@@ -363,7 +363,7 @@ def _band_weights_arrays(spectral_weights, wavelength, count: int):
 
 
 def binning_error_kernel(spectral_weights, wavelength, *, count: int):
-    r"""Relative error the wavelength bins of the polychromatic OTFs make in the band's mean 1/lambda.
+    r"""Relative error the polychromatic OTFs' wavelength bins make in the mean 1/lambda.
 
     A system the optics limit has an RER close to the integral of its polychromatic
     aperture OTF, which is :math:`\propto \sum_i w_i / \lambda_i`; the bins
