@@ -477,9 +477,12 @@ class Labelled:
             self.sensor, self.scenario, nodes, spectral_weights=system.otf_weights(
                 spectral_weights), integration_time=integration_time,
             slant_range=slant_range, method=m)
-        binning = apply_kernel(system.binning_error_kernel, spectral_weights,
-                               spectral_weights["wavelength"],
-                               core=[["wavelength"], ["wavelength"]], count=m.otf_wavelengths)
+        binning = 0.0  # every wavelength: no binning error
+        if m.otf_wavelengths > 0:
+            binning = apply_kernel(system.binning_error_kernel, spectral_weights,
+                                   spectral_weights["wavelength"],
+                                   core=[["wavelength"], ["wavelength"]],
+                                   count=m.otf_wavelengths)
         return otf.assign(binning_error=binning)
 
     @staticmethod
@@ -587,8 +590,10 @@ class Direct:
         unfiltered, filtered, r0 = system.system_slice_arrays(
             self.sensor, nodes, atm["wavelength"], spectral_weights, integration_time,
             slant_range, m)
-        binning = system.binning_error_kernel(spectral_weights, atm["wavelength"],
-                                              count=m.otf_wavelengths)
+        binning = 0.0  # every wavelength: no binning error
+        if m.otf_wavelengths > 0:
+            binning = system.binning_error_kernel(spectral_weights, atm["wavelength"],
+                                                  count=m.otf_wavelengths)
         return {"system": filtered, "system_unfiltered": unfiltered, "coherence_diameter": r0,
                 "binning_error": binning}
 
