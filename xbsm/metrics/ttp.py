@@ -27,6 +27,7 @@ from types import MappingProxyType
 
 import numpy as np
 import xarray as xr
+from scipy.integrate import trapezoid  # numpy.trapezoid needs numpy 2 (floor 1.24)
 
 from .._kernels import apply_kernel
 from .._metadata import Output, declared, outputs
@@ -159,7 +160,7 @@ def noise_bandwidths(frequency, spacing, magnification, luminance):
     stretched = frequency * np.exp(u)                                  # (..., n, 241)
     integrand = np.exp(-2.0 * eye_.CHANNEL_WIDTH * u * u) * stretched * gain(
         stretched, spacing[..., None], magnification[..., None])
-    channel = np.trapezoid(integrand, u, axis=-1)
+    channel = trapezoid(integrand, u, axis=-1)
     return channel, full
 
 

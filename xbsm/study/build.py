@@ -25,6 +25,7 @@ import xarray as xr
 
 from .. import model, params
 from .._version import __version__
+from ..atmosphere import database_path, use_database
 from ..methods import method as make_method
 from . import _cf
 from .attributes import parameter_attributes
@@ -135,13 +136,20 @@ def _chunk_coords(coords: dict, positions: dict) -> dict:
             for name, (dim, values, _) in coords.items()}
 
 
-def _chunk(study: Study, coords: dict, layout: dict, *positions) -> np.ndarray:
+def _chunk(study: Study, coords: dict, layout: dict, database, *positions) -> np.ndarray:
     """One chunk's outputs, every variable on the dims ``layout`` gives it, in a 1x..x1 cell.
 
     ``positions`` are the chunk's index positions along each study dimension, in order.
+    ``database``: the atmosphere file in use where the graph was built. A worker thread
+    sees it already where the scheduler copies the context (dask 2024 on); older dask
+    (the floor, 2023.6) starts its threads without it, so the chunk sets it again.
     """
-    out = _outputs(_chunk_coords(coords, dict(zip(study.sizes, positions, strict=True))),
-                   study)
+    chunk_coords = _chunk_coords(coords, dict(zip(study.sizes, positions, strict=True)))
+    if database_path() == database:
+        out = _outputs(chunk_coords, study)
+    else:
+        with use_database(database):
+            out = _outputs(chunk_coords, study)
     cell = np.empty((1,) * len(positions), dtype=object)
     cell[(0,) * len(positions)] = {name: out[name].transpose(*dims).values
                                    for name, dims in layout.items()}
@@ -225,7 +233,7 @@ def run(study: Study) -> xr.Dataset:
     positions = [dsa.arange(size, chunks=chunks[dim]) for dim, size in study.sizes.items()]
     letters = string.ascii_lowercase[:len(positions)]
     cells = dsa.blockwise(
-        functools.partial(_chunk, study, coords, layout), letters,
+        functools.partial(_chunk, study, coords, layout, database_path()), letters,
         *[arg for pos, letter in zip(positions, letters, strict=True) for arg in (pos, letter)],
         adjust_chunks={letter: 1 for letter in letters}, dtype=object,
         meta=np.empty((0,) * len(letters), dtype=object), align_arrays=False)
