@@ -355,7 +355,7 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
                    noise=True, method="accurate", components=None, reflectance=None,
                    reflectance_range=(0.05, 0.95), convolution=None, resampling=None,
                    basis=None, defocus_radius=None, channel_dim=None, outputs=None,
-                   counts_dtype=None, tile_size=None) -> xr.Dataset:
+                   counts_dtype=None, tile_size=None, warn_upsampled=True) -> xr.Dataset:
     """A reference image as the camera would record it in the scenario (paper Eq. 5-6).
 
     Parameters
@@ -419,6 +419,10 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
         :mod:`xbsm.simulate.tiles`), so the working memory depends on the tile, not the
         image. Any request is refused before allocation (a one-line ``MemoryError``
         naming the image and the sizes) if it cannot fit in the memory available.
+    warn_upsampled : bool, optional
+        Warn when the camera samples finer than the reference (the ``upsampled`` flag is
+        set either way). False for a caller that warns once for many images
+        (:func:`simulate_images`, image-dataset studies).
 
     Returns
     -------
@@ -438,7 +442,7 @@ def simulate_image(image, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd=None,
                      reflectance_range=reflectance_range, convolution=convolution,
                      resampling=resampling, basis=basis, defocus_radius=defocus_radius,
                      channel_dim=channel_dim, outputs=outputs, counts_dtype=counts_dtype,
-                     tile_size=tile_size, warn=True)
+                     tile_size=tile_size, warn=warn_upsampled)
 
 
 def _simulate(image, sensor, scenario, *, gsd, seed, noise, method, components, reflectance,

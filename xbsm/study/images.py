@@ -212,7 +212,8 @@ def simulate_one(pixels, gsd: float, cell: Cell, spec: DatasetSpec, seed: int, m
     result = sim.simulate_image(pixels, cell.sensor, cell.scenario, gsd=gsd, seed=seed,
                                 noise=spec.noise, method=method,
                                 outputs=("counts",) if counts else ("noisy",),
-                                counts_dtype=dtype if counts else None)
+                                counts_dtype=dtype if counts else None,
+                                warn_upsampled=False)  # once per run, from the flags
     if counts:
         image = result["counts"]
     else:
@@ -606,15 +607,10 @@ def _compute(missing, chunks, dataset, cells, spec, method, out, state, digest, 
     # the heavy arguments in a partial: dask neither traverses nor hashes them
     run = functools.partial(_run_chunk, dataset=dataset, cells=cells, spec=spec, method=method,
                             out=out, state=state, digest=digest, progress=bar)
-    with warnings.catch_warnings():
-        # one warning per run, not per image (below, from the outputs' flags); the filter is
-        # process-wide, so it covers the worker threads
-        warnings.filterwarnings("ignore", message=".*more finely sampled than the reference",
-                                category=UserWarning)
-        for start in range(0, len(missing), batch):
-            stop_if_interrupted()
-            tasks = [dask.delayed(run, pure=False)(k, chunks[k])
-                     for k in missing[start:start + batch]]
-            dask.compute(*tasks, scheduler="threads", num_workers=workers)
-            stop_if_interrupted()
+    for start in range(0, len(missing), batch):
+        stop_if_interrupted()
+        tasks = [dask.delayed(run, pure=False)(k, chunks[k])
+                 for k in missing[start:start + batch]]
+        dask.compute(*tasks, scheduler="threads", num_workers=workers)
+        stop_if_interrupted()
 
