@@ -19,7 +19,7 @@ reference at 4 mm GSD (about 3.3 reference pixels per camera pixel); the image i
 a synthetic scene (gradient, slanted edge, bars, squares) with noise, seed 0.
 
 ``--before PATH`` runs the same children on another checkout (e.g. the commit
-before the tiles, ``git worktree add /tmp/xbsm-before cf2fa1d``) and records both;
+before the tiles, ``git worktree add ../xbsm-before cf2fa1d``) and records both;
 ``--interleaved ROUNDS`` times only the 256 and 512 pixel images, alternating the
 two checkouts, and adds the medians to the JSON (a fair before/after on a shared
 machine). ``--after PATH`` measures a frozen copy of this checkout's HEAD instead of the
@@ -29,7 +29,7 @@ The 1-minute load average is read before and after each child. Writes
 
 Run from the repository root::
 
-    .venv/bin/python recipes/bench/simulate_large.py [--before /tmp/xbsm-before] [--repeats 5]
+    .venv/bin/python recipes/bench/simulate_large.py [--before ../xbsm-before] [--repeats 5]
 """
 
 from __future__ import annotations
