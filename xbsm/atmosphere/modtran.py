@@ -209,6 +209,14 @@ def _to_file_units(unit, grid, columns):
 
 def _parse_run(lines, start, path):
     """One run from line index ``start``: (Dataset, index after its end line)."""
+    conditions, header = _run_cards(lines, start, path)
+    names, ends, transmittance_only = _run_columns(lines, start, header, conditions, path)
+    table, i = _run_rows(lines, start, header, names, ends, transmittance_only, path)
+    return _run_dataset(table, names, conditions, path, start, header), i
+
+
+def _run_cards(lines, start, path):
+    """The run's card echo as a dict of settings, and the index of its spectral header."""
     card1 = _card1(lines[start], path, start + 1)
     conditions = dict(card1)
     conditions.update(_numbers(_F5, lines[start + 1], _CARD2,
@@ -233,6 +241,11 @@ def _parse_run(lines, start, path):
                                          (5, ("V1", "V2", "DV", "FWHM"), _NUMBER, "card 4")):
         i = columns_line + offset
         conditions.update(_numbers(pattern, lines[i], names, path, i + 1, card))
+    return conditions, header
+
+
+def _run_columns(lines, start, header, conditions, path):
+    """The spectral header's column names and ends, and whether the run is IEMSCT 0."""
     names, ends = _header_columns(lines[header])
     spectral = names[0].upper()
     if spectral not in _SPECTRAL:
@@ -248,6 +261,11 @@ def _parse_run(lines, start, path):
         # keep FREQ and COMBIN (the total); the species columns after them can run
         # together in the header (pyradi's tape7-01b: 'H2-CH4CH4-CH4')
         names, ends = names[:2], ends[:2]
+    return names, ends, transmittance_only
+
+
+def _run_rows(lines, start, header, names, ends, transmittance_only, path):
+    """The spectral rows as a table (strictly monotone first column), and the next index."""
     rows, row_lines, i = [], [], header + 1
     while i < len(lines):
         text = lines[i]
@@ -277,6 +295,13 @@ def _parse_run(lines, start, path):
         k = int(np.flatnonzero(step != step[0])[0]) + 1 if step[0] != 0 else 1
         _fail(path, row_lines[k], f"the spectral column {names[0]} is not strictly monotone "
                                   f"({float(grid[k - 1])!r} then {float(grid[k])!r})")
+    return table, i
+
+
+def _run_dataset(table, names, conditions, path, start, header):
+    """The database components of one run's table, in the file's units, as a Dataset."""
+    grid = table[:, 0]
+    spectral = names[0].upper()
     picked, sources = {}, {}
     for component, candidates in _COLUMNS.items():
         for name in candidates:
@@ -307,7 +332,7 @@ def _parse_run(lines, start, path):
     ds = xr.Dataset(data_vars, coords={"wavelength": ("wavelength", wavelength, {
         "units": "m", "long_name": "wavelength", "standard_name": "radiation_wavelength"})},
         attrs=attrs)
-    return ds, i
+    return ds
 
 
 def read_tape7(path) -> list[xr.Dataset]:
