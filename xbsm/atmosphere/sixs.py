@@ -427,15 +427,7 @@ def generate_database(path, *, altitude, ground_range, visibility=None, aot550=N
               "condition": "visibility" if aot550 is None else "aot550",
               "values": conditions, "wavelength": wavelength.tolist(),
               "settings": settings.attributes(), **versions}
-    key = hashlib.sha256(json.dumps(record, sort_keys=True).encode()).hexdigest()
-    work.mkdir(parents=True, exist_ok=True)
-    stamp = work / "settings.json"
-    if stamp.exists():
-        if json.loads(stamp.read_text()).get("key") != key:
-            raise ValueError(f"work_dir {str(work)!r} holds chunks of other settings or grid; "
-                             "give another folder or remove it")
-    else:
-        stamp.write_text(json.dumps({"key": key, **record}, indent=1))
+    stamp = _claim_work_folder(work, record)
     parts = {(v, a): work / f"slab_v{v:03d}_a{a:03d}.npy"
              for v in range(len(conditions)) for a in range(altitude.size)}
     missing = [k for k, p in parts.items() if not p.exists()]
@@ -457,13 +449,41 @@ def generate_database(path, *, altitude, ground_range, visibility=None, aot550=N
         vis_coord = np.asarray(conditions)
     else:
         vis_coord = np.asarray([_equivalent_visibility(t, settings) for t in conditions])
-    attrs = {
+    ds = from_tables(cube, visibility=vis_coord, altitude=altitude,
+                     ground_range=ground_range, wavelength=wavelength,
+                     attrs=_cube_attrs(title, settings, versions, record["condition"],
+                                       conditions))
+    write_database(ds, path)
+    for p in parts.values():
+        p.unlink()
+    stamp.unlink()
+    work.rmdir()
+    return path
+
+
+def _claim_work_folder(work: Path, record: dict) -> Path:
+    """The work folder's settings stamp: written for a new run, checked on a resumed one."""
+    key = hashlib.sha256(json.dumps(record, sort_keys=True).encode()).hexdigest()
+    work.mkdir(parents=True, exist_ok=True)
+    stamp = work / "settings.json"
+    if stamp.exists():
+        if json.loads(stamp.read_text()).get("key") != key:
+            raise ValueError(f"work_dir {str(work)!r} holds chunks of other settings or grid; "
+                             "give another folder or remove it")
+    else:
+        stamp.write_text(json.dumps({"key": key, **record}, indent=1))
+    return stamp
+
+
+def _cube_attrs(title, settings, versions, condition, conditions) -> dict:
+    """The generated file's attributes: the engine, its versions and every setting."""
+    return {
         "title": title or "atmosphere database generated with 6S (xbsm.atmosphere.sixs)",
         "source": "6S radiative transfer (6SV1.1) run through Py6S by "
                   "xbsm.atmosphere.sixs.generate_database",
         "surface_reflectance_of_database": float(settings.target_reflectance),
         **versions, **settings.attributes(),
-        "sixs_condition": record["condition"],
+        "sixs_condition": condition,
         "sixs_condition_values": np.asarray(conditions),
         "sixs_component_mapping": "TRANS = T_gas_up exp(-tau_plane / cos(view_zenith)); "
                                   "SOL_SCAT = atmospheric intrinsic + environment radiance; "
@@ -472,14 +492,6 @@ def generate_database(path, *, altitude, ground_range, visibility=None, aot550=N
         "comment": "plane-parallel 6S at the target's view zenith on a spherical Earth; NaN "
                    "beyond sixs_max_view_zenith; see docs/atmosphere.md",
     }
-    ds = from_tables(cube, visibility=vis_coord, altitude=altitude,
-                     ground_range=ground_range, wavelength=wavelength, attrs=attrs)
-    write_database(ds, path)
-    for p in parts.values():
-        p.unlink()
-    stamp.unlink()
-    work.rmdir()
-    return path
 
 
 def _equivalent_visibility(aot550, settings):
