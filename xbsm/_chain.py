@@ -35,6 +35,7 @@ from ._metadata import Output, dataset_of, declared, outputs, result
 from .atmosphere import WAVELENGTH_ATTRS, band_atmosphere, band_atmosphere_arrays
 from .metrics import acquisition
 from .metrics import edge as edge_
+from .metrics import eye as eye_
 from .metrics import giqe as giqe_
 from .metrics import ttp as ttp_
 from .otf import system
@@ -340,7 +341,7 @@ def target_acquisition(sensor: xr.Dataset, scenario: xr.Dataset, m, size, table,
         terms.pop("johnson_cycles", None)
         cycles = cycles.assign_attrs(ttp_.OUTPUTS["cycles_on_target"].attrs())
         flags = values["flags"]
-        photopic = ttp_.eye_.PHOTOPIC_LUMINANCE
+        photopic = eye_.PHOTOPIC_LUMINANCE
         if not photopic[0] <= knobs["luminance"] <= photopic[1]:
             flags = ap.flag(flags, "outside_acquisition_model", True)
         out = {"probability": ttp_.probabilities(cycles, table, criterion),
