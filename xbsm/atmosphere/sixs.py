@@ -53,7 +53,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..geometry import slant_and_elevation_kernel
+from ..constants import EARTH_RADIUS
 
 __all__ = [
     "DEFAULT_WAVELENGTHS",
@@ -201,10 +201,9 @@ def view_zenith(altitude, ground_range):
     .. math:: \zeta = 90^\circ - \operatorname{atan2}\big((R + h)\cos\theta - R,\
               (R + h)\sin\theta\big)
     """
-    # the GIQE's target elevation angle of xbsm.geometry, the same spherical Earth
-    _, elevation = slant_and_elevation_kernel(np.asarray(altitude, dtype=np.float64),
-                                              np.asarray(ground_range, dtype=np.float64),
-                                              "stable", "target")
+    theta = np.asarray(ground_range, dtype=np.float64) / EARTH_RADIUS
+    far = EARTH_RADIUS + np.asarray(altitude, dtype=np.float64)
+    elevation = np.arctan2(far * np.cos(theta) - EARTH_RADIUS, far * np.sin(theta))
     return 90.0 - np.degrees(elevation)
 
 
