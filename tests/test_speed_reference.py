@@ -4,8 +4,10 @@
 cf2fa1d (written by ``recipes/fixtures/speed_reference.py`` through that commit's public
 API): every fifth pyBSM fixture case and Olson sweeps over each optics parameter, with
 each method. Where the test runs on the fixture's numpy and CPU extensions (numpy's libm
-paths depend on both), ``method="pybsm"`` must agree to the bit and ``"accurate"`` /
-``"fast"`` within 1e-12 relative (the issue's bound for an unavoidable reassociation).
+paths depend on both), ``method="pybsm"`` must agree within 1e-13 relative (the pyBSM
+parity tests' tolerance: the factored turbulence powers move pyBSM's own formula by a few
+units in the last place, 5.7e-16 at most on these cases) and ``"accurate"`` / ``"fast"``
+within 1e-12 relative (the issue's bound for an unavoidable reassociation).
 Elsewhere (another numpy, another CPU: the CI's minimum-versions job) a different libm
 rounds differently, and pyBSM's law-of-cosines slant range amplifies one rounding of a
 cosine on short paths (``tests/pybsm_cases.geometry_rtol``: up to about 1e-6 at 100 m), so
@@ -83,9 +85,8 @@ def test_speed_reference_same_cases(current):
 
 @pytest.mark.parametrize("method", recipe.METHODS)
 def test_speed_reference_values_unchanged(current, method):
-    """pybsm to the bit, accurate / fast within 1e-12 relative (1e-6 on another libm)."""
-    exact = method == "pybsm" and SAME
-    rtol = 1e-12 if SAME else 1e-6
+    """pybsm within 1e-13, accurate / fast within 1e-12 relative (1e-6 on another libm)."""
+    rtol = (1e-13 if method == "pybsm" else 1e-12) if SAME else 1e-6
     for key, ref in REFERENCE["cases"].items():
         if not key.endswith(f"/{method}") or "error" in ref:
             continue
@@ -94,9 +95,6 @@ def test_speed_reference_values_unchanged(current, method):
             assert got.shape == expected.shape, (key, name)
             assert np.array_equal(np.isnan(got), np.isnan(expected)), (key, name)
             ok = ~np.isnan(expected)
-            if exact:
-                assert np.array_equal(got[ok], expected[ok]), (key, name)
-                continue
             same = got[ok] == expected[ok]  # also the infinite ones (r0 without turbulence)
             with np.errstate(invalid="ignore"):
                 relative = np.where(same, 0.0, np.abs(got[ok] - expected[ok])

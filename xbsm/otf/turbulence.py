@@ -597,15 +597,33 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
         radial_, r0_ref_, exposure_, speed_, diameter_, reference_, wl_, w_ = (
             a[..., columns] if a.shape[-1] > 1 else a for a in inputs)
         out = total[..., columns]
+        # the frequency's powers once per block, not once per wavelength and scenario
+        radial_5_3, radial_1_3 = radial_ ** (5.0 / 3.0), np.cbrt(radial_)
         step = max(1, _STEP // max(1, out.size))
         for start in range(0, n_wavelength, step):
             lam = wl_[start:start + step]
             r0 = _scale_kernel(r0_ref_, lam, reference_)
-            terms = w_[start:start + step] * _wind_blended_kernel(
-                radial_, lam, diameter_, r0, exposure_, speed_)
+            terms = w_[start:start + step] * _factored_wind_blended(
+                radial_5_3, radial_1_3, lam, diameter_, r0, exposure_, speed_)
             for term in terms:
                 out += term
     return total.reshape(shape)
+
+
+def _factored_wind_blended(radial_5_3, radial_1_3, wavelength, aperture_diameter,
+                           coherence_diameter, integration_time, wind_speed):
+    """:func:`_wind_blended_kernel` from the frequency's 5/3 and 1/3 powers, given.
+
+    ``(lambda f / r0)^(5/3)`` is ``(lambda / r0)^(5/3) f^(5/3)`` and ``(lambda f / D)^(1/3)``
+    is ``(lambda / D)^(1/3) f^(1/3)``: the powers of the frequency are taken once for every
+    wavelength and scenario, those of the wavelength ratios once for every frequency, and
+    what is left per value is two products and the two exponentials. The values differ
+    from the unfactored formula by a few units in the last place of the exponent.
+    """
+    weight = np.exp(-wind_speed * integration_time / coherence_diameter)
+    exponent = (-3.44 * (wavelength / coherence_diameter) ** (5.0 / 3.0)) * radial_5_3
+    tilt = (0.5 * (wavelength / aperture_diameter) ** (1.0 / 3.0)) * radial_1_3
+    return weight * np.exp(exponent * (1.0 - tilt)) + (1.0 - weight) * np.exp(exponent)
 
 
 def _column_blocks(shape):
