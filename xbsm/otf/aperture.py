@@ -137,13 +137,18 @@ def _one_obscuration(nu, eta):
 def _annulus_transition(nu, eta):
     """The overlap term C of IBSM Eq. 3-20 for (1 - eta)/2 <= nu <= (1 + eta)/2, eta > 0."""
     eta2 = eta**2
-    cos_phi = (1.0 + eta2 - 4.0 * nu**2) / (2.0 * eta)
-    phi = np.arccos(np.minimum(np.maximum(cos_phi, -1.0), 1.0))
+    cos_phi = np.minimum(np.maximum((1.0 + eta2 - 4.0 * nu**2) / (2.0 * eta), -1.0), 1.0)
+    phi = np.arccos(cos_phi)
+    # sin(phi) and tan(phi / 2) from cos(phi) by square roots (phi in [0, pi]): cheaper than
+    # the sine and tangent of phi, and no less accurate near phi = 0
+    with np.errstate(divide="ignore"):  # phi = pi: tan(phi / 2) = inf, arctan(inf) = pi / 2
+        sin_phi = np.sqrt((1.0 - cos_phi) * (1.0 + cos_phi))
+        tan_half = np.sqrt((1.0 - cos_phi) / (1.0 + cos_phi))
     return (
-        2.0 * eta * np.sin(phi) / np.pi
+        2.0 * eta * sin_phi / np.pi
         + (1.0 + eta2) * phi / np.pi
         - 2.0 * eta2
-        - (2.0 * (1.0 - eta2) / np.pi) * np.arctan((1.0 + eta) / (1.0 - eta) * np.tan(phi / 2.0))
+        - (2.0 * (1.0 - eta2) / np.pi) * np.arctan((1.0 + eta) / (1.0 - eta) * tan_half)
     )
 
 
