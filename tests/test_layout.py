@@ -33,7 +33,8 @@ WHOLE_PACKAGE = {"test_architecture", "test_layout", "test_conventions", "test_d
 #: Top-level test files named otherwise than their module: file stem -> module.
 NAMED_OTHERWISE = {"test_model_snr": "model", "test_model_niirs": "model",
                    "test_model_netd": "model", "test_model_mrtd": "model",
-                   "test_kernel_boundary": "_kernels", "test_chain": "_chain"}
+                   "test_kernel_boundary": "_kernels", "test_chain": "_chain",
+                   "test_trig": "_trig"}
 
 
 def picture_order() -> list[str]:

@@ -24,6 +24,8 @@ import xarray as xr
 
 from .._kernels import apply_kernel, apply_orchestrator, dataset
 from .._metadata import Output, named, outputs
+from .._trig import sine as trig_sine
+from .._trig import sine_cosine
 
 __all__ = [
     "EHO_POSITIONS",
@@ -84,12 +86,13 @@ def _edge_response_kernel(otf, weights, abscissa, ifov, position):
     with np.errstate(all="ignore"):  # IEEE results without warnings, as xarray's arithmetic
         phase = (2.0 * np.pi * abscissa * np.asarray(ifov)[..., None]
                  * np.asarray(position)[..., None])
-        sine = weights * np.sin(phase) / abscissa
         if np.iscomplexobj(otf):
-            cosine = weights * np.cos(phase) / abscissa
+            sin_phase, cos_phase = sine_cosine(phase)
+            sine = weights * sin_phase / abscissa
+            cosine = weights * cos_phase / abscissa
             integral = _sum_of_products(otf.real, sine) + _sum_of_products(otf.imag, cosine)
         else:
-            integral = _sum_of_products(otf, sine)
+            integral = _sum_of_products(otf, weights * trig_sine(phase) / abscissa)
         return 0.5 + integral / np.pi
 
 
@@ -147,8 +150,11 @@ def _edge_tables(abscissa, ifov, cosine: bool):
     with np.errstate(all="ignore"):
         phase = (2.0 * np.pi * abscissa[..., None, :] * np.asarray(ifov)[..., None, None]
                  * positions[:, None])
-        return (np.sin(phase) / abscissa[..., None, :],
-                np.cos(phase) / abscissa[..., None, :] if cosine else None)
+        inverse = 1.0 / abscissa[..., None, :]
+        if not cosine:
+            return trig_sine(phase) * inverse, None
+        sin_phase, cos_phase = sine_cosine(phase)
+        return sin_phase * inverse, cos_phase * inverse
 
 
 def _apply_edge(kernel, otf_slice, weights, *args, n_out=1, **knobs):

@@ -6,6 +6,7 @@ import numpy as np
 
 from .._kernels import apply_kernel
 from .._metadata import described
+from .._trig import sinc
 from ..params import Spec, Values, contract
 from ._contracts import COUNT, FOCAL_LENGTH, LENGTH, POSITIVE_NUMBER, UNIT_INTERVAL
 
@@ -43,8 +44,8 @@ def detector(fx, fy, detector_width_x, detector_width_y, focal_length):
 
 def detector_kernel(detector_width_x, focal_length, fx, detector_width_y, fy):
     """IBSM Eq. 3-36 on plain arrays (arguments in the order of the result's dims)."""
-    return (np.sinc(detector_width_x / focal_length * fx)
-            * np.sinc(detector_width_y / focal_length * fy))
+    return (sinc(detector_width_x / focal_length * fx)
+            * sinc(detector_width_y / focal_length * fy))
 
 
 def _aggregation_factor(frequency, pitch, focal_length, n):

@@ -6,6 +6,7 @@ import numpy as np
 
 from .._kernels import apply_kernel
 from .._metadata import described
+from .._trig import sinc
 from ..params import contract
 from ._contracts import BLUR, FOCAL_LENGTH, LENGTH, POSITIVE_NUMBER, RATE
 from .spectral import is_lazy
@@ -75,7 +76,7 @@ def drift(fx, fy, drift_x, drift_y):
 
 def drift_kernel(drift_x, fx, drift_y, fy):
     """IBSM Eq. 3-29 on plain arrays (arguments in the order of the result's dims)."""
-    return np.sinc(drift_x * fx) * np.sinc(drift_y * fy)
+    return sinc(drift_x * fx) * sinc(drift_y * fy)
 
 
 @contract(detector_width=LENGTH, focal_length=FOCAL_LENGTH, rate_ratio=POSITIVE_NUMBER,
