@@ -18,6 +18,7 @@ a Ctrl-C while Python imports numpy is one line.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 from pathlib import Path
@@ -157,20 +158,36 @@ def _draw_or_warn(result_file: Path, directory: Path) -> list[Path]:
         return []
 
 
-def info() -> None:
-    """Print the atmosphere coverage, the method presets and the versions."""
+def info(atmosphere=None) -> None:
+    """Print the atmosphere coverage, the method presets and the versions.
+
+    ``atmosphere``: another database file (validated as ``xbsm run --atmosphere`` does);
+    its conditions besides visibility (aerosol model, model atmosphere, sun, ...) are
+    listed with the values it holds.
+    """
     from ._version import __version__
-    from .atmosphere import database_path, open_atmosphere
+    from .atmosphere import (
+        database_conditions,
+        database_path,
+        listed,
+        open_atmosphere,
+        use_database,
+    )
     from .methods import PRESETS
     from .study.store import dependency_versions
 
-    atm = open_atmosphere()
-    print(f"xbsm {__version__} ({dependency_versions()})")
-    print(f"atmosphere database: {database_path()}")
-    for dim, units, scale in (("altitude", "km", 1e-3), ("ground_range", "km", 1e-3),
-                              ("visibility", "km", 1.0), ("wavelength", "um", 1e6)):
-        values = atm[dim].values * scale
-        print(f"  {dim}: {len(values)} values from {values.min():g} to {values.max():g} {units}")
+    with use_database(atmosphere) if atmosphere is not None else contextlib.nullcontext():
+        atm = open_atmosphere()
+        print(f"xbsm {__version__} ({dependency_versions()})")
+        print(f"atmosphere database: {database_path()}")
+        for dim, units, scale in (("altitude", "km", 1e-3), ("ground_range", "km", 1e-3),
+                                  ("visibility", "km", 1.0), ("wavelength", "um", 1e6)):
+            values = atm[dim].values * scale
+            print(f"  {dim}: {len(values)} values from {values.min():g} to {values.max():g} "
+                  f"{units}")
+        for name, values in database_conditions().items():
+            if name != "visibility":
+                print(f"  {name}: {listed(name, values)}")
     print("method presets: " + ", ".join(sorted(PRESETS)) + " (default accurate)")
     print(f"default study (xbsm run): {default_study_path()}")
 
@@ -204,7 +221,9 @@ def _parser() -> argparse.ArgumentParser:
     plot_.add_argument("--sel", action="append", metavar="DIM=VALUE",
                        help="draw at one value of a dimension (nearest for numbers); repeatable, "
                             "e.g. --sel altitude=3000 --sel visibility=23")
-    sub.add_parser("info", help="atmosphere coverage, method presets, versions")
+    info_ = sub.add_parser("info", help="atmosphere coverage, method presets, versions")
+    info_.add_argument("--atmosphere", type=Path, metavar="FILE",
+                       help="another atmosphere database file: its coverage and conditions")
     olson = sub.add_parser("olson", help="alias of `xbsm run` into a directory")
     olson.add_argument("--out", type=Path, default=Path("olson"), help="output directory")
     return parser
@@ -230,7 +249,7 @@ def _command(parser, args) -> None:
             parser.error(f"no result file {args.result}")
         draw(args.result, args.out or _figure_dir(args.result), args.sel)
     else:
-        info()
+        info(args.atmosphere)
 
 
 def _exit_past_hdf5(code: int) -> None:

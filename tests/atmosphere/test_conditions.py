@@ -313,6 +313,25 @@ def test_xbsm_run_takes_the_database_of_a_condition_study(two_models, tmp_path, 
             two_models.read_bytes()).hexdigest()
 
 
+def test_xbsm_info_lists_the_conditions_a_database_holds(two_models, tmp_path, capsys):
+    import xbsm.cli
+
+    assert xbsm.cli.main(["info", "--atmosphere", str(two_models)]) == 0
+    out = capsys.readouterr().out
+    # the file written by the fixture: aerosol models 1 and 4 at this module's visibilities
+    assert f"atmosphere database: {two_models}" in out
+    assert "  aerosol_model: 1, 4 [1]" in out
+    assert (f"visibility: {VISIBILITIES.size} values from {VISIBILITIES.min():g} to "
+            f"{VISIBILITIES.max():g} km") in out
+    assert xbsm.cli.main(["info"]) == 0  # the shipped database: no condition besides visibility
+    assert "aerosol_model" not in capsys.readouterr().out
+    foreign = tmp_path / "foreign.nc"
+    foreign.write_bytes(b"not a NetCDF file")
+    with pytest.raises(SystemExit) as stop:
+        xbsm.cli.main(["info", "--atmosphere", str(foreign)])
+    assert stop.value.code == 2 and "xbsm info: " in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("ground_range", [100.0, 500.0])
 def test_the_shipped_tables_follow_koschmieder_where_the_rule_assumes_it(ground_range):
     # the premise of the rule: extinction linear in 1/V. At 2 m above the ground and
