@@ -201,3 +201,27 @@ def test_default_ttpf_differs_from_the_constant_exponent_above_v50():
     assert patent_ttpf(26.0, 13.0) == pytest.approx(0.7388, abs=5e-4)
     assert ttp.cycles_for_probability(0.8, 1.0) == pytest.approx(2.0, abs=0.01)
     assert 4.0 ** (1.0 / 1.5) == pytest.approx(2.52, abs=0.005)
+
+
+# ---------------------------------------------------------------------------------------
+# The visual channel (xbsm.metrics.eye.visual_channel) and the Johnson N50 table
+# ---------------------------------------------------------------------------------------
+
+def test_visual_channel_is_mitres_open_nv_ipm_channel():
+    # IRwhaleDetect.m (mitre/whale-ir-model, commit 542e5ef0), getNF:
+    # "Hchan = exp(-2.2*log(abs(spatialFreq)./spatialFreq(p)).^2)"
+    f = np.geomspace(0.01, 10.0, 200)
+    for centre in (0.05, 0.7, 3.0):
+        mitre = np.exp(-2.2 * np.log(np.abs(f) / centre) ** 2)
+        np.testing.assert_allclose(eye.visual_channel(f, centre), mitre, rtol=1e-13)
+
+
+def test_johnson_1958_n50_are_the_published_criteria():
+    # Johnson's criteria as Wikipedia states them (stored copies at knowpia.com and
+    # liquisearch.com, "Johnson's criteria"): detection 1.0 +/- 0.25, recognition 4 +/- 0.8,
+    # identification 6.4 +/- 1.5 line pairs, "a 50 percent probability of an observer
+    # discriminating an object to the specified level".
+    table = ttp.JOHNSON_N50["johnson_1958"]
+    for task, published in {"detect": 1.0, "recognize": 4.0, "identify": 6.4}.items():
+        assert table[task] == published
+        assert ttp.johnson_probability(published, table[task]) == pytest.approx(0.5)
