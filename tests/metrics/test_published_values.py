@@ -62,9 +62,10 @@ def test_physical_model_reproduces_itu_r_bt2246_figure_31_as_colour_digitises_it
     # ITU-R BT.2246-4": the minimum detectable contrast MDC = 2 / (1.27 S_max) at the peak
     # frequency, X0 = 60 deg, p = 1.2274e6, L = logspace(-2, 2, 10) cd/m^2, printed to 7
     # digits. (colour's reproduction of the figure, not the figure: the ITU report's
-    # figure itself could not be read with the project's tools.) colour's pupil formula uses the natural logarithm (np.log), not Barten's
-    # log10 (see test_log10_pupil_is_the_one_barten_2003_supports); it is used here to
-    # reproduce colour's curve, the rest is xbsm's.
+    # figure itself could not be read with the project's tools.) colour's pupil formula
+    # uses the natural logarithm (np.log), not Barten's log10 (see
+    # test_log10_pupil_is_the_one_barten_2003_supports); it is used here to reproduce
+    # colour's curve, the rest is xbsm's.
     published = [0.0207396, 0.0133019, 0.0089256, 0.0064202, 0.0050275,
                  0.0041933, 0.0035573, 0.0030095, 0.0025803, 0.0022897]
     luminance = np.logspace(-2.0, 2.0, 10)
@@ -72,7 +73,7 @@ def test_physical_model_reproduces_itu_r_bt2246_figure_31_as_colour_digitises_it
     sigma = np.sqrt((0.5 / 60.0) ** 2 + (0.08 / 60.0 * pupil) ** 2)
     retinal = eye.retinal_illuminance(luminance, pupil)
     mdc = []
-    for s, e in zip(sigma, retinal):
+    for s, e in zip(sigma, retinal, strict=True):
         def negative(u, s=s, e=e):
             return -eye.barten_sensitivity(u, s, e, 60.0, photon_conversion=1.2274e6)
         peak = fmin(negative, 0.0, disp=False)[0]  # colour's own search, from 0
