@@ -45,12 +45,14 @@ def test_threshold_falls_with_luminance_and_field_size_at_low_frequency():
     assert np.all(np.diff(small) < 0)
 
 
-def test_barten_physical_model_and_its_closed_form_fit_share_their_shape():
-    # Barten's closed form is his fit of the physical model: same peak frequency (within
+def test_barten_physical_model_and_the_closed_form_share_their_shape():
+    # Barten's empirical closed form and his physical model: same peak frequency (within
     # one grid step of 0.1 cycles/deg x 1.6) and the same high-frequency fall; the
-    # measured ratio of peak sensitivities (physical / fit) is 1.29 at 100 cd/m^2, 10 deg,
-    # and 1.23-1.36 over the cases below: a constant of the transcription (see the module
-    # docstring), not a shape difference.
+    # measured ratio of peak sensitivities (physical / closed form) is 1.29 at 100
+    # cd/m^2, 10 deg, and 1.23-1.36 over the cases below. Not a transcription error: the
+    # physical model reproduces colour-science's values and Barten's 2003 formula
+    # (tests/metrics/test_published_values.py), and the closed form MITRE's open NV-IPM
+    # observer; the two are different models.
     f = np.geomspace(0.2, 40.0, 400)
     for lum, w in [(100.0, 10.0), (10.0, 4.0), (500.0, 10.0), (34.26, 2.0)]:
         fit = 1.0 / eye.ctf_vollmerhausen(f, lum, w)

@@ -8,26 +8,33 @@ Two eye models, by name (:data:`EYE_MODELS`):
 - ``"vollmerhausen"`` (default): the eye contrast threshold function (CTF) the US Army's
   target-acquisition models use for the observer (Vollmerhausen, "Representing the
   observer in electro-optical target acquisition models", Opt. Express 17(20), 17253,
-  2009; the NVThermIP / NV-IPM observer): Barten's closed-form fit of the naked-eye
-  CTF with its dependence on luminance and field size (:func:`ctf_vollmerhausen`), for
-  ``eyes`` eyes, and a noise term with calibration constant :data:`EYE_NOISE_CONSTANT`
-  added by :mod:`xbsm.metrics.ttp`.
+  2009; the NVThermIP / NV-IPM observer): Barten's empirical closed-form CTF with its
+  dependence on luminance and field size (:func:`ctf_vollmerhausen`), for ``eyes``
+  eyes, and a noise term with calibration constant :data:`EYE_NOISE_CONSTANT` added by
+  :mod:`xbsm.metrics.ttp`.
 - ``"barten"``: Barten's physical contrast sensitivity model (:func:`csf_barten`):
   optical MTF of the eye, photon noise and neural noise, lateral inhibition, spatial
   and temporal integration (Barten, *Contrast Sensitivity of the Human Eye and its
   Effects on Image Quality*, SPIE Press, 1999, chapter 3; the same model as a
-  formula in Barten, Proc. SPIE 5294, 2003). The closed form of ``"vollmerhausen"``
-  is Barten's own fit of it.
+  formula in Barten, Proc. SPIE 5294, 2003).
 
-Sources and what could be checked: the formulas and constants below were written from
-those publications as the author of this module knows them; the project's search
-tools returned the abstracts and opening pages of the 2009 paper and of Barten's book
-(including its statement that the model is restricted to photopic vision), not the
-pages with the equations. An open implementation of the NV-IPM observer (MITRE,
-``IRwhaleDetect.m``, Apache-2.0, found with the search tools) uses the same closed-form
-CTF constants (540, 0.7, 12, 3, 0.3, 100, 0.15, 0.06) and the visual channel
-:func:`visual_channel`; the tests check each formula against an independent
-evaluation and the two eye models against each other.
+The two are different models, not a model and its fit: at 1-16 cycles/deg, 10-1000
+cd/m^2 and 2-40 deg the closed form's sensitivity is 0.55-1.05 times that of Barten's
+own simplified formula of the physical model (Proc. SPIE 5294, 2003), which the
+physical model here follows within 2 % at a 40 deg field (see below).
+
+Sources and what was checked (``tests/metrics/test_published_values.py``; the table
+in ``docs/target_acquisition.md``): the physical model's constants (k = 3, T = 0.1 s,
+X_max = 12 deg, N_max = 15, eta = 0.03, p = 1.24e6, Phi0 = 3e-8 s deg^2, u0 = 7
+cycles/deg, sigma0 = 0.5 arcmin, C_ab = 0.08 arcmin/mm, the log10 pupil formula) are
+the ones of the open implementation of Barten's original model in castleCSF
+(``gfxdisp/castleCSF``, ``matlab/CSF_Barten_Original.m``); the model reproduces the
+unit-test values of ``colour.contrast.contrast_sensitivity_function_Barten1999``
+(colour-science) to 1e-12 and Barten's 2003 simplified formula within 2 % at a 40 deg
+field. The closed form's constants (540, 0.7, 12, 3, 0.3, 100, 0.15, 0.06) are those
+of MITRE's open NV-IPM observer (``IRwhaleDetect.m``, Apache-2.0); the pages of the
+2009 paper and of Barten's book with the equations could not be read with the
+project's search tools.
 """
 
 from __future__ import annotations
@@ -98,8 +105,8 @@ def ctf_vollmerhausen(frequency, luminance, field_size, eyes=2):
         a = \frac{540\,(1 + 0.7/L)^{-0.2}}{1 + 12 / \left(w (1 + f/3)^2\right)},\quad
         b = 0.3\,(1 + 100/L)^{0.15}
 
-    Barten 1999, Eq. 3.26 (his closed-form fit of the physical model), as the NVESD
-    observer uses it (Vollmerhausen 2009).
+    Barten's empirical closed form (Barten 1999, Eq. 3.26), as the NVESD observer uses
+    it (Vollmerhausen 2009; constants as in MITRE's ``IRwhaleDetect.m``).
     """
     a = 540.0 * (1.0 + 0.7 / luminance) ** -0.2 / (
         1.0 + 12.0 / (field_size * (1.0 + frequency / 3.0) ** 2))
@@ -133,6 +140,60 @@ def eye_mtf(frequency, luminance, field_size=10.0):
     return np.exp(-2.0 * math.pi ** 2 * sigma ** 2 * frequency ** 2)
 
 
+def retinal_illuminance(luminance, pupil):
+    r"""Retinal illuminance with the Stiles-Crawford correction (Barten) [Td].
+
+    .. math:: E = \frac{\pi d^2}{4} L \left(1 - (d/9.7)^2 + (d/12.4)^4\right)
+
+    ``luminance`` L [cd/m^2], ``pupil`` diameter d [mm] (:func:`pupil_diameter`).
+    """
+    return math.pi * pupil ** 2 / 4.0 * luminance * (1.0 - (pupil / 9.7) ** 2
+                                                       + (pupil / 12.4) ** 4)
+
+
+def barten_sensitivity(frequency, sigma, retinal, field_size, photon_conversion=_P):
+    r"""Barten's physical contrast sensitivity from its physical inputs [1].
+
+    Parameters
+    ----------
+    frequency : array_like
+        Spatial frequency at the eye, in (0, inf). [cycles/deg]
+    sigma : array_like
+        Standard deviation of the eye's line-spread function, in [0, inf). [deg]
+    retinal : array_like
+        Retinal illuminance E, in (0, inf). [Td]
+    field_size : array_like
+        Angular size X0 of the (square) field, in (0, inf). [deg]
+    photon_conversion : float
+        Photon conversion factor p, in (0, inf); 1.24e6 for Barten's standard light.
+        [photons s-1 deg-2 Td-1]
+
+    Returns
+    -------
+    array_like
+        Sensitivity, one over the threshold modulation (binocular). [1]
+
+    Notes
+    -----
+    .. math::
+
+        S(f) = \frac{e^{-2\pi^2\sigma^2 f^2} / k}{\sqrt{\frac{2}{T}
+        \left(\frac{1}{X_0^2} + \frac{1}{X_{max}^2} + \frac{f^2}{N_{max}^2}\right)
+        \left(\frac{1}{\eta\,p\,E} + \frac{\Phi_0}{1 - e^{-(f/u_0)^2}}\right)}}
+
+    k = 3, T = 0.1 s, X_max = 12 deg, N_max = 15, eta = 0.03, Phi0 = 3e-8 s deg^2,
+    u0 = 7 cycles/deg (Barten 1999, ch. 3; Barten 2003). :func:`csf_barten` gives
+    sigma and E from the luminance and the field.
+    """
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        integration = (2.0 / _T) * (1.0 / field_size ** 2 + 1.0 / _X_MAX ** 2
+                                    + frequency ** 2 / _N_MAX ** 2)
+        noise = (1.0 / (_ETA * photon_conversion * retinal)
+                 + _PHI0 / (1.0 - np.exp(-(frequency / _U0) ** 2)))
+        optics = np.exp(-2.0 * math.pi ** 2 * sigma ** 2 * frequency ** 2)
+        return optics / _K / np.sqrt(integration * noise)
+
+
 def csf_barten(frequency, luminance, field_size):
     r"""Contrast sensitivity of the eye, Barten's physical model, against frequency [1].
 
@@ -152,24 +213,15 @@ def csf_barten(frequency, luminance, field_size):
 
     Notes
     -----
-    .. math::
-
-        S(f) = \frac{M_{opt}(f) / k}{\sqrt{\frac{2}{T}
-        \left(\frac{1}{X_0^2} + \frac{1}{X_{max}^2} + \frac{f^2}{N_{max}^2}\right)
-        \left(\frac{1}{\eta\,p\,E} + \frac{\Phi_0}{1 - e^{-(f/u_0)^2}}\right)}}
-
-    with the retinal illuminance E = (pi d^2 / 4) L (1 - (d/9.7)^2 + (d/12.4)^4) [Td],
-    k = 3, T = 0.1 s, X_max = 12 deg, N_max = 15, eta = 0.03, p = 1.24e6
-    photons/(s deg^2 Td), Phi0 = 3e-8 s deg^2, u0 = 7 cycles/deg (Barten 1999,
+    :func:`barten_sensitivity` with the pupil d of :func:`pupil_diameter`, the
+    line-spread sigma = sqrt(sigma0^2 + (C_ab d)^2) of :func:`eye_mtf` (sigma0 = 0.5
+    arcmin, C_ab = 0.08 arcmin/mm), the retinal illuminance of
+    :func:`retinal_illuminance` and p = 1.24e6 photons/(s deg^2 Td) (Barten 1999,
     ch. 3; Barten 2003).
     """
     d = pupil_diameter(luminance, field_size)
-    retinal = math.pi * d ** 2 / 4.0 * luminance * (1.0 - (d / 9.7) ** 2 + (d / 12.4) ** 4)
-    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
-        integration = (2.0 / _T) * (1.0 / field_size ** 2 + 1.0 / _X_MAX ** 2
-                                    + frequency ** 2 / _N_MAX ** 2)
-        noise = 1.0 / (_ETA * _P * retinal) + _PHI0 / (1.0 - np.exp(-(frequency / _U0) ** 2))
-        return eye_mtf(frequency, luminance, field_size) / _K / np.sqrt(integration * noise)
+    sigma = np.sqrt(_SIGMA0 ** 2 + (_C_AB * d) ** 2) / 60.0
+    return barten_sensitivity(frequency, sigma, retinal_illuminance(luminance, d), field_size)
 
 
 def eye_ctf(frequency, luminance, field_size, eye="vollmerhausen", eyes=2):

@@ -81,7 +81,11 @@ OUTPUTS = outputs(
 """The target-acquisition outputs, declared."""
 
 TTPF_OFFSET, TTPF_SLOPE = 1.51, 0.24
-"""E = 1.51 + 0.24 V / V50 of the TTP metric's probability function."""
+"""E = 1.51 + 0.24 V / V50 of the TTP metric's probability function (as the issue states
+it, after Vollmerhausen & Jacobs, NVESD TR-230, 2004). The later NVESD form, E = 1.5
+(US patent 9,152,880, claim 2; MITRE's open ``IRwhaleDetect.m``), is
+``task_probability(v, v50, offset=1.5, slope=0.0)``: the same P = 0.5 at V50, lower P
+above it (0.739 against 0.799 at 2 V50)."""
 JOHNSON_OFFSET, JOHNSON_SLOPE = 2.7, 0.7
 """E = 2.7 + 0.7 N / N50 of the classic Johnson-criteria probability function (NVL 1975)."""
 
