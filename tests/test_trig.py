@@ -10,8 +10,11 @@ from xbsm._trig import sinc, sine, sine_cosine
 # the reference: numpy's sine and cosine in 80-bit long double (x86), whose rounding error
 # is 2^11 times below float64's; where long double is float64 (other platforms) the check
 # is against the library's float64 values, with the library's own error added
+# tan is rounded differently by each numpy (SVML's vectorised one on AVX-512, the C
+# library's elsewhere): measured 2.2e-16 with numpy 2.4 and 3.6e-16 with numpy 1.24 (the
+# CI's floor) against the long double; the bound is 4.5 units of 1e-16, a few ulp of 1
 LONG = np.finfo(np.longdouble).eps < np.finfo(float).eps
-BOUND = 2.5e-16 if LONG else 4e-16
+BOUND = 4.5e-16 if LONG else 6.5e-16
 
 
 def _values():
@@ -45,7 +48,8 @@ def test_sine_keeps_the_sign_and_size_of_tiny_arguments():
 
 def test_sinc_is_numpys_normalised_sinc():
     x = np.concatenate([_values() / np.pi, [0.0, 1.0, -2.0, 0.5]])
-    # absolute: sinc <= 1, and numpy's own (sin(pi x) / (pi x) in float64) is the reference
-    assert np.max(np.abs(sinc(x) - np.sinc(x))) <= 4e-16
+    # absolute: sinc <= 1, and numpy's own (sin(pi x) / (pi x) in float64, itself a few
+    # ulp from the true value) is the reference: 3.3e-16 (numpy 2.4), 4.4e-16 (numpy 1.24)
+    assert np.max(np.abs(sinc(x) - np.sinc(x))) <= 6.5e-16
     assert sinc(0.0) == 1.0
     assert np.shape(sinc(np.zeros((3, 2)))) == (3, 2)
