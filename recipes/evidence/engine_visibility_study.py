@@ -158,7 +158,12 @@ def figure(niirs):
         ax.set_title(f"6S {MODELS[int(code)].lower()} aerosols")
         ax.set_xlabel("ground range (km)")
         ax.grid(alpha=0.3)
-    axes[0].set_ylabel("NIIRS (GIQE 5)")
+        off = niirs.sel(aerosol_model=code).where(niirs.sel(aerosol_model=code) < 0)
+        for g, v in zip(*np.nonzero(np.isfinite(off.values)), strict=True):  # off the axis
+            ax.annotate(f"{float(off[g, v]):.0f}", (float(niirs["ground_range"][g]) / 1e3, 0.2),
+                        ha="center", fontsize=8, color="C4")
+        ax.set_ylim(0, 10.5)
+    axes[0].set_ylabel("NIIRS (GIQE 5; values below 0 written at the axis)")
     axes[1].legend(title="visibility")
     fig.suptitle("Olson camera, red band, 9 km altitude: 6S-generated tables")
     fig.tight_layout()
