@@ -33,10 +33,11 @@ from .reflectance import image_to_reflectance
 from .resample import blur_and_resample, resample, resampling_taps
 from .sampling import sampling
 from .tiles import (
-    TILE_HALO_FACTOR,
+    TILE_HALO_MAX,
     TILE_SIZE,
     check_memory,
     tile_core,
+    tile_halo,
     tile_reflectance,
     tile_statistics,
     tiled_blur_and_resample,
@@ -250,7 +251,7 @@ def _tiled_camera_image(img, stats, optics: Optics, samp, shape, im: ImageMethod
     angle = samp["reference_angle"]
     taps = resampling_taps(samp, shape, im.resampling)
     half, small = kernel_half_width(optics, angle, shape)
-    halo = min(TILE_HALO_FACTOR * half, max(shape))
+    halo, _ = tile_halo(optics, angle, half, shape)
     core = (tile_core(taps, "y", shape[0], tile_size), tile_core(taps, "x", shape[1], tile_size))
     psf, spectrum = tiled_psf(optics, angle, halo, *core)
     out = tiled_blur_and_resample(img, stats, spectrum, taps, halo, core, mapping,
@@ -290,7 +291,9 @@ def _memory_needed(img, samp, outputs, counts_dtype, tiled, tile_size) -> int:
     held += 8 * out_px * (("blurred" in chosen) + ("noisy" in chosen) + 4)
     held += out_px * (8 if counts_dtype is None else np.dtype(counts_dtype).itemsize)
     if tiled:
-        grid = (min(tile_size, ny) + 64) * (min(tile_size, nx) + 64)
+        # a tile with the largest halo the wing tolerance may ask for
+        grid = (min(tile_size, ny) + 2 * TILE_HALO_MAX) * (min(tile_size, nx)
+                                                           + 2 * TILE_HALO_MAX)
         working = 8 * grid * (6 + 4 * cells) + 32 * tile_size**2
     else:
         padded = (ny + 64) * (nx + 64)
