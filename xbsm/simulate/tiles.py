@@ -18,8 +18,9 @@ and the method's knobs are the accurate path's (``psf="exact"``,
    (:func:`xbsm.simulate.psf.kernel_from_otf`); the halo is chosen from the
    kernel's energy (:func:`tile_halo`: doubled from ``TILE_HALO_FACTOR`` cores
    until the wings beyond it hold at most :data:`TILE_WING_TOLERANCE` of its sum),
-   and the wings' share of each pixel is given the image's mean reflectance rather
-   than spread over the kernel. Each block of the reference (read with reflected
+   and the wings' share of each pixel is given the image's mean reflectance (over
+   all its colour channels, from the statistics pass) rather than spread over the
+   kernel. Each block of the reference (read with reflected
    borders, mapped to reflectance) is convolved with it by FFT and only its middle,
    where the linear convolution is exact, is kept. The tiles join without seams: a
    tiled image does not depend on the tile size beyond floating-point rounding.
@@ -65,7 +66,7 @@ TILE_HALO_FACTOR = 4
 TILE_WING_TOLERANCE = 2e-3
 """The largest energy (sum) of the kernel's wings beyond the halo: the halo doubles from
 ``TILE_HALO_FACTOR`` cores until the wings hold no more (or it reaches
-:data:`TILE_HALO_MAX`, or the image's size)."""
+:data:`TILE_HALO_MAX`)."""
 TILE_HALO_MAX = 512
 """The largest halo the wing tolerance may ask for (unless ``TILE_HALO_FACTOR`` cores are
 more). [reference pixels]"""
