@@ -9,23 +9,28 @@ each shifted and scaled by its index so that no two are equal, at 4 mm GSD, as
 8-bit PNG files; the same pixel values are given to pyBSM.
 
 - xbsm: the image-dataset study (``xbsm.study.simulate``: the folder in, 16-bit PNG
-  counts and a COCO file per range out) in a child process of the project's Python,
-  for each image size, with ``--images`` images (and ``--images / 10`` to show
-  that memory does not grow with the dataset), on 1 thread and on 2; wall time and
-  the child's peak RSS (``resource.getrusage``).
+  counts and a COCO file per range out, the default 8 images per chunk) in a child
+  process of the project's Python, for each image size, with ``--images`` images
+  (and ``--images / 10`` to show that memory does not grow with the dataset), on
+  each of ``--workers`` threads; wall time and the child's peak RSS
+  (``resource.getrusage``).
 - pyBSM 0.16.1 (its own environment, ``NUMBA_NUM_THREADS=1``, through
-  ``recipes/_pybsm_runner.py``): ``pybsm.simulation.simulate_image`` on the first
-  ``--pybsm-images`` images at the 5 ranges (one call per image and range, each
-  timed, after a warm-up call); pyBSM takes seconds per call and its peak memory is
-  gigabytes, so it runs on a subset of the same images.
+  ``recipes/_pybsm_runner.py``): ``pybsm.simulation.simulate_image`` on
+  ``--pybsm-images`` of the same images at the 5 ranges (one call per image and
+  range, each timed, after a warm-up call); pyBSM takes seconds per call, so it
+  runs on a subset of the images (different ones each round).
 
-Per output image (one image at one range): pyBSM's median call time, xbsm's wall
-time over its outputs, and their ratio, to ``docs/benchmarks/bench_dataset.json``
-(with the machine, its load and the commit); ``docs/datasets.md`` quotes them.
+The machine is shared, so the two are measured interleaved: ``--rounds`` rounds per
+size, each an xbsm run at both dataset sizes then a pyBSM run, with the 1-minute
+load printed after each. Per output image (one image at one range): pyBSM's median
+call time over every round, xbsm's median over the rounds of its wall time per
+output, and their ratio (also per round, from that round's pyBSM median), to
+``docs/benchmarks/bench_dataset.json`` (with the machine, its load and the
+commit); ``docs/datasets.md`` quotes them.
 Run from the repository root with an environment that has the ``datasets`` extra::
 
     PYBSM_PYTHON=.../pybsm-venv/bin/python python recipes/bench/bench_dataset.py \\
-        [--sizes 256 512] [--images 100] [--pybsm-images 3]
+        [--sizes 256 512] [--images 100] [--pybsm-images 2] [--rounds 3] [--workers 1]
 """
 
 from __future__ import annotations
@@ -84,8 +89,7 @@ def one(image, ground_range):
     return time.perf_counter() - t0
 
 one(scene(job["size"], 0), job["ground_ranges"][0])  # warm-up: numba, file caches
-times = [one(scene(job["size"], k), g) for k in range(job["images"])
-         for g in job["ground_ranges"]]
+times = [one(scene(job["size"], k), g) for k in job["indices"] for g in job["ground_ranges"]]
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 json.dump({"times": times, "peak_rss": peak}, sys.stdout)
 '''
@@ -129,7 +133,7 @@ def study_text(names: dict) -> str:
     lines += [f"{k} = {v!r}" for k, v in sensor.items()]
     lines += ["[scenario]", "altitude = 3000.0", "visibility = 23.0", "[sweep]",
               f"ground_range = {GROUND_RANGES!r}", "[dataset]", "input = \"images\"",
-              f"gsd = {GSD}", "output = \"out\"", "chunk_images = 4"]
+              f"gsd = {GSD}", "output = \"out\""]
     return "\n".join(lines) + "\n"
 
 
@@ -146,65 +150,91 @@ def run_xbsm(job: dict) -> dict:
     return json.loads(proc.stdout)
 
 
+def _xbsm_runs(size, images, workers, text, load) -> list:
+    runs = []
+    for n in (max(1, images // 10), images):
+        for threads in workers:
+            with tempfile.TemporaryDirectory() as folder:
+                run = run_xbsm({"folder": folder, "images": n, "size": size, "study": text,
+                                "workers": threads})
+            outputs = n * len(GROUND_RANGES)
+            assert run["written"] == outputs, run
+            run.update(images=n, workers=threads, outputs=outputs,
+                       per_output_s=run["wall"] / outputs, images_per_s=outputs / run["wall"])
+            runs.append(run)
+            load.append((f"xbsm {size} {n} images {threads} threads", load_average()))
+            print(f"{size}: xbsm {n} images x 5 ranges, {threads} thread(s): "
+                  f"{run['wall']:.1f} s, {run['images_per_s']:.1f} images/s, peak "
+                  f"{run['peak_rss'] / 2**20:.0f} MB (load {load[-1][1]:.2f})", flush=True)
+    return runs
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[256, 512])
     parser.add_argument("--images", type=int, default=100)
-    parser.add_argument("--pybsm-images", type=int, default=3)
-    parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--pybsm-images", type=int, default=2)
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--workers", type=int, nargs="+", default=[1])
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
     from xbsm.pybsm_compat import SENSOR_NAMES
 
     text = study_text(dict(SENSOR_NAMES))
     load, results = [("start", load_average())], {}
+    print(f"load average (1 min) at the start: {load[0][1]:.2f}", flush=True)
     for size in args.sizes:
-        row = {"xbsm": [], "pybsm": None}
-        for images in (max(1, args.images // 10), args.images):
-            for workers in args.workers:
-                with tempfile.TemporaryDirectory() as folder:
-                    run = run_xbsm({"folder": folder, "images": images, "size": size,
-                                    "study": text, "workers": workers})
-                outputs = images * len(GROUND_RANGES)
-                assert run["written"] == outputs, run
-                run.update(images=images, workers=workers, outputs=outputs,
-                           per_output_s=run["wall"] / outputs,
-                           images_per_s=outputs / run["wall"])
-                row["xbsm"].append(run)
-                load.append((f"xbsm {size} {images} images {workers} threads",
-                             load_average()))
-                print(f"{size}: xbsm {images} images x 5 ranges, {workers} thread(s): "
-                      f"{run['wall']:.1f} s, {run['images_per_s']:.1f} images/s, peak "
-                      f"{run['peak_rss'] / 2**20:.0f} MB", flush=True)
-        pybsm = run_child(PYBSM_CHILD, {"sensor": SENSOR, "scenario": SCENARIO,
-                                        "ground_ranges": GROUND_RANGES, "gsd": GSD,
-                                        "size": size, "images": args.pybsm_images})
-        load.append((f"pybsm {size}", load_average()))
-        pybsm["per_output_s"] = statistics.median(pybsm["times"])
-        row["pybsm"] = pybsm
-        print(f"{size}: pyBSM {len(pybsm['times'])} calls, median "
-              f"{pybsm['per_output_s']:.2f} s, peak {pybsm['peak_rss'] / 2**20:.0f} MB",
-              flush=True)
-        for run in row["xbsm"]:
-            run["ratio_to_pybsm"] = pybsm["per_output_s"] / run["per_output_s"]
-        results[str(size)] = row
-    print("\n| size | images x ranges | threads | xbsm images/s | x pyBSM | peak RSS |")
+        rounds = []
+        for r in range(args.rounds):
+            runs = _xbsm_runs(size, args.images, args.workers, text, load)
+            indices = list(range(r * args.pybsm_images, (r + 1) * args.pybsm_images))
+            pybsm = run_child(PYBSM_CHILD, {"sensor": SENSOR, "scenario": SCENARIO,
+                                            "ground_ranges": GROUND_RANGES, "gsd": GSD,
+                                            "size": size, "indices": indices})
+            load.append((f"pybsm {size} round {r}", load_average()))
+            median = statistics.median(pybsm["times"])
+            print(f"{size}: pyBSM round {r}: {len(pybsm['times'])} calls, median "
+                  f"{median:.2f} s, peak {pybsm['peak_rss'] / 2**20:.0f} MB "
+                  f"(load {load[-1][1]:.2f})", flush=True)
+            for run in runs:
+                run["round"], run["ratio_to_round_pybsm"] = r, median / run["per_output_s"]
+            rounds.append({"xbsm": runs, "pybsm": pybsm, "pybsm_median_s": median})
+        times = [t for rnd in rounds for t in rnd["pybsm"]["times"]]
+        pybsm_s = statistics.median(times)
+        summary = []
+        for n in (max(1, args.images // 10), args.images):
+            for threads in args.workers:
+                same = [run for rnd in rounds for run in rnd["xbsm"]
+                        if run["images"] == n and run["workers"] == threads]
+                per = statistics.median(run["per_output_s"] for run in same)
+                summary.append({
+                    "images": n, "workers": threads, "per_output_s": per,
+                    "images_per_s": 1 / per, "ratio_to_pybsm": pybsm_s / per,
+                    "ratios_per_round": [run["ratio_to_round_pybsm"] for run in same],
+                    "peak_rss": max(run["peak_rss"] for run in same),
+                    "baseline_rss": max(run["baseline_rss"] for run in same)})
+        results[str(size)] = {"rounds": rounds, "xbsm": summary, "pybsm": {
+            "calls": len(times), "per_output_s": pybsm_s,
+            "peak_rss": max(rnd["pybsm"]["peak_rss"] for rnd in rounds)}}
+    print("\n| size | images x ranges | threads | xbsm images/s | x pyBSM (per round) | "
+          "peak RSS |")
     print("|---|---|---|---|---|---|")
     for size, row in results.items():
         for run in row["xbsm"]:
+            rounds = ", ".join(f"{x:.0f}" for x in run["ratios_per_round"])
             print(f"| {size} | {run['images']} x 5 | {run['workers']} | "
-                  f"{run['images_per_s']:.1f} | {run['ratio_to_pybsm']:.0f} | "
+                  f"{run['images_per_s']:.1f} | {run['ratio_to_pybsm']:.0f} ({rounds}) | "
                   f"{run['peak_rss'] / 2**20:.0f} MB |")
         p = row["pybsm"]
-        print(f"| {size} | pyBSM {len(p['times'])} calls | 1 | {1 / p['per_output_s']:.2f} | 1 "
+        print(f"| {size} | pyBSM {p['calls']} calls | 1 | {1 / p['per_output_s']:.3f} | 1 "
               f"| {p['peak_rss'] / 2**20:.0f} MB |")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({
         "machine": machine(), **commit(), "load_average_1min": load,
         "config": {"sensor": SENSOR, "scenario": SCENARIO, "ground_ranges": GROUND_RANGES,
                    "gsd": GSD, "sizes": args.sizes, "images": args.images,
-                   "pybsm_images": args.pybsm_images, "numba_num_threads": 1,
-                   "study": text},
+                   "pybsm_images_per_round": args.pybsm_images, "rounds": args.rounds,
+                   "numba_num_threads": 1, "study": text},
         "results": results}, indent=1) + "\n")
     print(f"wrote {args.out}")
 

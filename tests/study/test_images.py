@@ -118,9 +118,9 @@ def test_a_resumed_run_recomputes_only_the_unfinished_chunks(tmp_path, finished,
     (out / "ground_range=4000" / "img3.png").unlink()
     (out / "ground_range=4000" / "annotations.json").unlink()
     calls = []
-    real = images.simulate_one
-    monkeypatch.setattr(images, "simulate_one",
-                        lambda *a, **k: (calls.append(1), real(*a, **k))[1])
+    real = images.simulate_batch
+    monkeypatch.setattr(images, "simulate_batch",
+                        lambda *a, **k: (calls.extend(a[0]), real(*a, **k))[1])
     study.simulate(spec2, progress=False)
     assert len(calls) == 3 * 2  # images 2, 3 and 4 at two ranges; 0 and 1 were kept
     assert "1 of 3 chunks are finished and kept" in capsys.readouterr().out

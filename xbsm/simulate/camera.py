@@ -37,14 +37,20 @@ def seed_entropy(seed) -> int:
 
 
 def _noise_kernel(mean, sigma, ids, entropy):
-    """Poisson shot noise plus Gaussian noise, one seeded stream per image (last 2 axes)."""
-    mean, sigma, ids = align_leading(mean, 2, sigma, 0, ids, 0)
-    lead = np.broadcast_shapes(mean.shape[:-2], np.shape(sigma), np.shape(ids))
+    """Poisson shot noise plus Gaussian noise, one seeded stream per image (last 2 axes).
+
+    ``entropy``: one seed's entropy for all, or an array of them (one per image,
+    broadcast like ``ids``).
+    """
+    mean, sigma, ids, entropy = align_leading(mean, 2, sigma, 0, ids, 0, entropy, 0)
+    lead = np.broadcast_shapes(mean.shape[:-2], np.shape(sigma), np.shape(ids),
+                               np.shape(entropy))
     mean = np.broadcast_to(mean, lead + mean.shape[-2:])
     sigma, ids = np.broadcast_to(sigma, lead), np.broadcast_to(ids, lead)
+    entropy = np.broadcast_to(entropy, lead)
     out = np.empty(mean.shape)
     for index in np.ndindex(lead):
-        rng = np.random.default_rng(np.random.SeedSequence(entropy,
+        rng = np.random.default_rng(np.random.SeedSequence(int(entropy[index]),
                                                            spawn_key=(int(ids[index]),)))
         lam, draw = mean[index], out[index]
         # in strips of rows: the generator's stream is sequential, so the draws are those
@@ -81,8 +87,11 @@ def add_noise(photoelectrons: xr.DataArray, sensor: xr.Dataset, *, seed=None,
         pixels stay NaN. [count]
     sensor : xr.Dataset
         ``read_noise``, ``other_noise`` (and ``max_well``, ``bit_depth``). [count]
-    seed : int, optional
-        Seed; ``None`` draws fresh entropy.
+    seed : int or xr.DataArray, optional
+        Seed; ``None`` draws fresh entropy. A DataArray of seeds (non-negative whole
+        numbers) gives every image along its dims its own seed, as if each
+        were drawn alone: the stream of an image is then numbered by its position
+        along the other dims only.
     quantization : {"round", "pybsm"}
         "pybsm" adds the quantization noise max_well / (sqrt(12) (2^b - 1)) as Gaussian
         noise too (with the read noise, without other noise), as pyBSM.
@@ -95,15 +104,20 @@ def add_noise(photoelectrons: xr.DataArray, sensor: xr.Dataset, *, seed=None,
         Poisson(mean) plus Normal(0, sigma) per pixel, sigma the root-sum-square of
         the Gaussian terms; one independent stream per image. [count]
     """
-    entropy = seed_entropy(seed)
     sigma = _gaussian_sigma(sensor, quantization)
     lead = xr.broadcast(photoelectrons.isel({d: 0 for d in dims}, drop=True), sigma)[0]
+    if isinstance(seed, xr.DataArray):  # a seed per image: streams numbered without its dims
+        entropy = xr.DataArray(np.vectorize(seed_entropy, otypes=[object])(seed.values),
+                               dims=seed.dims)
+        lead = lead.isel({d: 0 for d in seed.dims if d in lead.dims}, drop=True)
+    else:
+        entropy = xr.DataArray(np.array(seed_entropy(seed), dtype=object))
     ids = xr.DataArray(np.arange(math.prod(lead.shape)).reshape(lead.shape), dims=lead.dims)
     if photoelectrons.chunks is not None:
         photoelectrons = photoelectrons.chunk({d: -1 for d in dims})
     out = xr.apply_ufunc(
-        _noise_kernel, photoelectrons, sigma, ids, kwargs={"entropy": entropy},
-        input_core_dims=[list(dims), [], []], output_core_dims=[list(dims)],
+        _noise_kernel, photoelectrons, sigma, ids, entropy,
+        input_core_dims=[list(dims), [], [], []], output_core_dims=[list(dims)],
         dask="parallelized", output_dtypes=[float])
     return out
 

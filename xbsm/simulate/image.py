@@ -33,10 +33,11 @@ from .reflectance import image_to_reflectance
 from .resample import blur_and_resample, resample, resampling_taps
 from .sampling import sampling
 from .tiles import (
-    TILE_HALO_FACTOR,
+    TILE_HALO_MAX,
     TILE_SIZE,
     check_memory,
     tile_core,
+    tile_halo,
     tile_reflectance,
     tile_statistics,
     tiled_blur_and_resample,
@@ -250,7 +251,7 @@ def _tiled_camera_image(img, stats, optics: Optics, samp, shape, im: ImageMethod
     angle = samp["reference_angle"]
     taps = resampling_taps(samp, shape, im.resampling)
     half, small = kernel_half_width(optics, angle, shape)
-    halo = min(TILE_HALO_FACTOR * half, max(shape))
+    halo, _ = tile_halo(optics, angle, half, shape)
     core = (tile_core(taps, "y", shape[0], tile_size), tile_core(taps, "x", shape[1], tile_size))
     psf, spectrum = tiled_psf(optics, angle, halo, *core)
     out = tiled_blur_and_resample(img, stats, spectrum, taps, halo, core, mapping,
@@ -290,7 +291,9 @@ def _memory_needed(img, samp, outputs, counts_dtype, tiled, tile_size) -> int:
     held += 8 * out_px * (("blurred" in chosen) + ("noisy" in chosen) + 4)
     held += out_px * (8 if counts_dtype is None else np.dtype(counts_dtype).itemsize)
     if tiled:
-        grid = (min(tile_size, ny) + 64) * (min(tile_size, nx) + 64)
+        # a tile with the largest halo the wing tolerance may ask for
+        grid = (min(tile_size, ny) + 2 * TILE_HALO_MAX) * (min(tile_size, nx)
+                                                           + 2 * TILE_HALO_MAX)
         working = 8 * grid * (6 + 4 * cells) + 32 * tile_size**2
     else:
         padded = (ny + 64) * (nx + 64)
@@ -498,7 +501,8 @@ def _simulate(image, sensor, scenario, *, gsd, seed, noise, method, components, 
                       ideal=offset + gain * mapped["reflectance"]
                       if "ideal" in chosen or not fused else None)
         blurred, psf, psf_flags = _camera_image(images, optics, samp, gsd, shape, im)
-    entropy = camera.seed_entropy(seed)
+    # a DataArray of seeds: one per image of a stack (simulate_images' batches)
+    entropy = seed if isinstance(seed, xr.DataArray) else camera.seed_entropy(seed)
     noisy = (camera.add_noise(blurred, sensor, seed=entropy, quantization=im.quantization)
              if noise else blurred)
     if digital:
@@ -512,7 +516,7 @@ def _simulate(image, sensor, scenario, *, gsd, seed, noise, method, components, 
         counts = _integer_counts(counts, counts_dtype, fill)
     images.update(blurred=blurred, noisy=noisy, counts=counts)
     return _assemble(images, samp, radiometry, psf, flags, im, outputs=outputs, attrs={
-        "seed": str(entropy), "noise": "on" if noise else "off",
+        "seed": "per image" if isinstance(entropy, xr.DataArray) else str(entropy), "noise": "on" if noise else "off",
         "components": " ".join(comps), "reference_gsd": str(gsd),
         **({"alpha": "dropped"} if alpha else {})})
 
@@ -538,14 +542,67 @@ def _as_list_item(item, index: int):
     return xr.DataArray(array, dims=dims, name=f"#{index}")
 
 
+BATCH_PIXELS = 1 << 22
+"""Reference pixel values (rows x columns x channels) of one batch of
+:func:`simulate_images`: images of one shape, dtype and GSD are simulated together
+in batches up to this size (about 4 million values, 32 MB per float64 copy)."""
+
+
+def _batches(images, gsds, tile_size):
+    """Lists of image indices simulated together: numpy images of one shape, dtype and GSD
+    (untiled, up to :data:`BATCH_PIXELS` values per batch), every other image alone."""
+    groups, order = {}, []
+    for i, (item, g) in enumerate(zip(images, gsds, strict=True)):
+        key = None
+        if isinstance(item, np.ndarray) and item.ndim in (2, 3) and np.ndim(g) == 0 \
+                and max(item.shape[:2]) <= tile_size and item.size > 0:
+            key = (item.shape, item.dtype.str, float(g))
+        if key is None or key not in groups or \
+                (len(groups[key]) + 1) * item.size > max(BATCH_PIXELS, item.size):
+            groups[key if key is not None else ("alone", i)] = group = []
+            order.append(group)
+        groups[key if key is not None else ("alone", i)].append(i)
+    return order
+
+
+def _stacked(images, indices):
+    """Images of one shape as one DataArray over ("stack", y, x[, band])."""
+    array = np.stack([images[i] for i in indices])
+    dims = ("stack", "y", "x") if array.ndim == 3 else ("stack", "y", "x", "band")
+    coords = {"band": ["R", "G", "B", "A"]} if array.ndim == 4 and array.shape[-1] == 4 else {}
+    return xr.DataArray(array, dims=dims, coords=coords, name=f"#{indices[0]}")
+
+
+def _seeds(seed, seeds, n: int) -> list:
+    """One seed per image: spawned from ``seed`` and the position, or ``seeds`` as given."""
+    if seeds is None:
+        entropy = camera.seed_entropy(seed)
+        return [_image_seed(entropy, i) for i in range(n)]
+    if seed is not None:
+        raise ValueError("give seed (the run's) or seeds (one per image), not both")
+    seeds = list(seeds)
+    if len(seeds) != n:
+        raise ValueError(f"seeds must give one seed per image ({n}); got {len(seeds)}")
+    for i, value in enumerate(seeds):
+        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
+            raise ValueError(f"seeds[{i}] must be a non-negative whole number; got {value!r}")
+    return [int(value) for value in seeds]
+
+
 def simulate_images(images, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd, seed=None,
-                    **kwargs) -> list:
+                    seeds=None, warn_upsampled=True, **kwargs) -> list:
     """A list of reference images of any sizes and channel counts, one run of the camera.
 
     Each image is simulated on its own sampling, as :func:`simulate_image` does (its own
     blur: one kernel per distinct optical state and reference sampling, never one image's
     kernel reused for another's sampling); a camera that samples finer than a reference
     is flagged ``upsampled`` on each such image and warned about once for the whole list.
+
+    Images of one shape, dtype and GSD (numpy arrays no larger than a tile) are
+    simulated together, as one stack (up to :data:`BATCH_PIXELS` values at a time):
+    the radiometry, sampling and blur are computed once per batch, the reflectance
+    mapping and the noise stream stay each image's own, so every result equals the
+    :func:`simulate_image` call of that image alone with its seed.
 
     Parameters
     ----------
@@ -560,6 +617,12 @@ def simulate_images(images, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd, se
         The run's seed; image ``i`` gets a seed spawned from it and ``i`` (recorded in its
         result's ``seed`` attribute, so any image can be regenerated alone). ``None``:
         fresh entropy.
+    seeds : sequence of int, optional
+        Instead of ``seed``: the seed of each image, used as given (image-dataset
+        studies give each output its own).
+    warn_upsampled : bool
+        The one ``upsampled`` warning for the list (False: the caller warns, from the
+        flags, e.g. once for a whole dataset).
     **kwargs
         Any other keyword of :func:`simulate_image`.
 
@@ -573,7 +636,7 @@ def simulate_images(images, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd, se
     if len(gsds) != len(images):
         raise ValueError(f"gsd must be one value or one per image ({len(images)}); got "
                          f"{len(gsds)}")
-    entropy = camera.seed_entropy(seed)
+    per_image = _seeds(seed, seeds, len(images))
     options = dict(noise=True, method="accurate", components=None, reflectance=None,
                    reflectance_range=(0.05, 0.95), convolution=None, resampling=None,
                    basis=None, defocus_radius=None, channel_dim=None, outputs=None,
@@ -584,13 +647,24 @@ def simulate_images(images, sensor: xr.Dataset, scenario: xr.Dataset, *, gsd, se
                          "simulate_image")
     options.update(kwargs)
     options["outputs"] = Selection(IMAGE_OUTPUTS).check("outputs", options["outputs"])
-    results = [
-        _simulate(_as_list_item(item, i), sensor, scenario, gsd=g,
-                  seed=_image_seed(entropy, i), warn=False, **options)
-        for i, (item, g) in enumerate(zip(images, gsds, strict=True))]
+    tile_size = TILE_SIZE if options["tile_size"] is None else options["tile_size"]
+    tile_size = tile_size if isinstance(tile_size, int | np.integer) else TILE_SIZE
+    results = [None] * len(images)
+    for batch in _batches(images, gsds, tile_size):
+        if len(batch) == 1:
+            i = batch[0]
+            results[i] = _simulate(_as_list_item(images[i], i), sensor, scenario, gsd=gsds[i],
+                                   seed=per_image[i], warn=False, **options)
+            continue
+        stack = _stacked(images, batch)
+        out = _simulate(stack, sensor, scenario, gsd=gsds[batch[0]], warn=False,
+                        seed=xr.DataArray(np.array([per_image[i] for i in batch], dtype=object),
+                                          dims="stack"), **options)
+        for k, i in enumerate(batch):
+            results[i] = out.isel(stack=k, drop=True).assign_attrs(seed=str(per_image[i]))
     upsampled = [i for i, r in enumerate(results)
                  if bool(fl.has_flag(r["flags"], "upsampled").any())]
-    if upsampled:
+    if upsampled and warn_upsampled:
         shown = ", ".join(str(i) for i in upsampled[:10]) + (", ..." if len(upsampled) > 10
                                                               else "")
         warnings.warn(

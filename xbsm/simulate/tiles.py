@@ -14,21 +14,25 @@ and the method's knobs are the accurate path's (``psf="exact"``,
    equal ``numpy.nanpercentile``'s to the bit. A second pass gives the mean
    reflectance that fills non-finite pixels.
 2. **Overlap-save convolution.** The blur kernel is the middle
-   ``(2 halo + 1) ** 2`` samples of the system OTF's kernel on one tile's Fourier
-   grid (:func:`xbsm.simulate.psf.kernel_from_otf`), normalised to sum one; each
-   block of the reference (read with reflected borders, mapped to reflectance) is
-   convolved with it by FFT and only its middle, where the linear convolution is
-   exact, is kept. The tiles join without seams: a tiled image does not depend on
-   the tile size beyond floating-point rounding.
+   ``(2 halo + 1) ** 2`` samples of the system OTF's kernel on a grid of its own
+   (:func:`xbsm.simulate.psf.kernel_from_otf`); the halo is chosen from the
+   kernel's energy (:func:`tile_halo`: doubled from ``TILE_HALO_FACTOR`` cores
+   until the wings beyond it hold at most :data:`TILE_WING_TOLERANCE` of its sum),
+   and the wings' share of each pixel is given the image's mean reflectance (over
+   all its colour channels, from the statistics pass) rather than spread over the
+   kernel. Each block of the reference (read with reflected
+   borders, mapped to reflectance) is convolved with it by FFT and only its middle,
+   where the linear convolution is exact, is kept. The tiles join without seams: a
+   tiled image does not depend on the tile size beyond floating-point rounding.
 3. **Tile-wise resampling.** Output pixels are taken in blocks whose taps fall in
    one tile; each block is the same tap arithmetic as the untiled path.
 
 The untiled path multiplies the whole image's spectrum by the OTF (an exact
 periodic convolution, no truncation); the tiled path truncates the kernel at the
-halo, ``TILE_HALO_FACTOR`` times the blur's core
-(:func:`xbsm.simulate.psf.kernel_half_width`).
-The difference is the energy of the kernel's far wings (measured in
-``tests/simulate/test_tiles.py`` and ``docs/simulate.md``).
+halo. The difference is the wings' energy beyond the halo (at most
+:data:`TILE_WING_TOLERANCE`) times the image's departure from its mean, and near
+the borders the untiled path's own boundary (measured in
+``tests/simulate/test_tiles_wings.py`` and ``docs/simulate.md``).
 
 Memory is checked before anything image-sized is allocated
 (:func:`check_memory`): a request that cannot fit in the memory available
@@ -51,13 +55,21 @@ from .psf import kernel_from_otf, otf_rfft_grid
 from .reflectance import PERCENTILES
 from .resample import apply_taps, reflect_index
 
-__all__ = ["TILE_HALO_FACTOR", "TILE_SIZE", "available_memory", "check_memory", "tile_core",
-           "tile_reflectance", "tile_statistics", "tiled_blur_and_resample", "tiled_psf"]
+__all__ = ["TILE_HALO_FACTOR", "TILE_HALO_MAX", "TILE_SIZE", "TILE_WING_TOLERANCE",
+           "available_memory", "check_memory", "tile_core", "tile_halo", "tile_reflectance",
+           "tile_statistics", "tiled_blur_and_resample", "tiled_psf"]
 
 TILE_SIZE = 2048
 """Default ``simulate_image(tile_size=)``: reference pixels per side of a tile's core."""
 TILE_HALO_FACTOR = 4
-"""The tiled kernel's half-width in multiples of the blur's core half-width."""
+"""The tiled kernel's smallest half-width in multiples of the blur's core half-width."""
+TILE_WING_TOLERANCE = 2e-3
+"""The largest energy (sum) of the kernel's wings beyond the halo: the halo doubles from
+``TILE_HALO_FACTOR`` cores until the wings hold no more (or it reaches
+:data:`TILE_HALO_MAX`)."""
+TILE_HALO_MAX = 512
+"""The largest halo the wing tolerance may ask for (unless ``TILE_HALO_FACTOR`` cores are
+more). [reference pixels]"""
 _BINS = 4096
 _GATHER = 1 << 16
 
@@ -384,6 +396,53 @@ def tile_core(taps, axis, size, tile):
     return int(min(max(-(-size // count) + 2 * span, span), size, max(tile, span)))
 
 
+def _kernel(optics, angle, halo: int) -> xr.DataArray:
+    """The middle (2 halo + 1)^2 samples of the kernel on a grid of its own.
+
+    The grid does not depend on the tile, so tiles of any size join the same way (its
+    wrapped-around wings start 3 halo from the centre).
+    """
+    own = fft.next_fast_len(4 * halo + 2, real=True)
+    return kernel_from_otf(otf_rfft_grid(optics, angle, own, own), own, halo)
+
+
+def tile_halo(optics, angle, half: int, shape):
+    """The tiles' halo chosen from the kernel's energy, and the energy of its wings.
+
+    Parameters
+    ----------
+    optics : xbsm.simulate.psf.Optics
+    angle : xr.DataArray
+        Reference image sample angle, per scenario. [rad]
+    half : int
+        The blur's core half-width (:func:`xbsm.simulate.psf.kernel_half_width`).
+        [reference pixels]
+    shape : (int, int)
+        The image's rows and columns. [reference pixels]
+
+    Returns
+    -------
+    int, float
+        The halo: ``TILE_HALO_FACTOR`` cores, doubled while the kernel's wings beyond
+        it hold more than :data:`TILE_WING_TOLERANCE` of its sum, up to
+        :data:`TILE_HALO_MAX` (whatever the image's size, so images of one sampling
+        share one kernel; the first halo is at most the image's larger side); the
+        wings' largest energy over the scenarios at that halo (on the kernel's own
+        grid, whose sum is the OTF at zero frequency). [reference pixels], [1]
+    """
+    halo = min(TILE_HALO_FACTOR * half, max(shape))
+    top = max(TILE_HALO_MAX, halo)
+    while True:
+        own = fft.next_fast_len(4 * halo + 2, real=True)
+        otf = otf_rfft_grid(optics, angle, own, own)
+        psf = kernel_from_otf(otf, own, halo)
+        total = otf.isel(fy=0, fx=0).real
+        wing = float((total - psf.sum(("psf_y", "psf_x"))).max())
+        if wing <= TILE_WING_TOLERANCE or halo >= top:
+            return halo, wing
+        halo = min(2 * halo, top)
+
+
 def tiled_psf(optics, angle, halo: int, core_y: int, core_x: int):
     """The truncated blur kernel of the tiles and its spectrum on one tile's FFT grid.
 
@@ -400,16 +459,13 @@ def tiled_psf(optics, angle, halo: int, core_y: int, core_x: int):
     Returns
     -------
     xr.DataArray, xr.DataArray
-        The kernel over (scenario dims, ``psf_y``, ``psf_x``), summing to one, and its
-        ``rfft2`` over (scenario dims, ``ky``, ``kx``) on the grid of
+        The kernel over (scenario dims, ``psf_y``, ``psf_x``), summing to one less its
+        wings beyond the halo (the tiles give the wings the image's mean reflectance),
+        and its ``rfft2`` over (scenario dims, ``ky``, ``kx``) on the grid of
         ``next_fast_len(core + 2 halo)`` samples per axis. [1]
     """
     grid = tuple(fft.next_fast_len(c + 2 * halo, real=True) for c in (core_y, core_x))
-    # the kernel from a grid that does not depend on the tile: tiles of any size join the
-    # same way (its wrapped-around wings start 3 halo from the centre)
-    own = fft.next_fast_len(4 * halo + 2, real=True)
-    psf = kernel_from_otf(otf_rfft_grid(optics, angle, own, own), own, halo)
-    psf = psf / psf.sum(("psf_y", "psf_x"))
+    psf = _kernel(optics, angle, halo)
 
     def spectrum(k):
         placed = np.zeros(k.shape[:-2] + grid)
@@ -446,6 +502,8 @@ def _tiled_kernel(img, stats, spectrum, index_y, weight_y, index_x, weight_x, *,
                 region = np.asarray(one[np.ix_(rows, cols)], dtype=np.float64)
                 refl = _reflectance(region, stat, mapping)
                 blurred = fft.irfft2(fft.rfft2(refl, s=grid) * spec, s=grid)
+                # the kernel's wings beyond the halo (its missing sum) see the image's mean
+                blurred += (1.0 - spec[0, 0].real) * stat[3]
                 blurred = blurred[halo: halo + r1 - r0, halo: halo + c1 - c0]
                 out[index][oy0:oy1, ox0:ox1] = apply_taps(
                     blurred, iy[oy0:oy1] - r0, wy[oy0:oy1], ix[ox0:ox1] - c0, wx[ox0:ox1])

@@ -4,9 +4,11 @@ A study file with a ``[dataset]`` table (``docs/datasets.md``) names an image
 folder or a COCO file, what to write and how; ``xbsm simulate STUDY.toml`` and
 :func:`simulate` run it. The images are cut into chunks of ``chunk_images``;
 each chunk is one lazy dask task that reads its images, simulates each at
-every scenario (:func:`simulate_one`, one :func:`xbsm.simulate_image` call per
-image and scenario with that output's own seed) and writes each output image as
-soon as it is made, so memory depends on the chunk, not the dataset. Each file
+every scenario (:func:`simulate_batch`, one :func:`xbsm.simulate_images` call per
+scenario for the chunk's images, each output with its own seed; images of one
+shape share the radiometry and blur, and each output equals the
+:func:`simulate_one` call of its image alone) and writes each output image as
+soon as the scenario is done, so memory depends on the chunk, not the dataset. Each file
 is written whole or not at all (:mod:`xbsm.datasets.writers`); a chunk's record
 (its images' metadata and moved labels, with SHA-256 checksums of its files) is
 written last, so a chunk with a record is finished. An interrupted run (Ctrl-C,
@@ -42,10 +44,10 @@ from ._source import Source, StudyError, section, shown, unknown_name
 from ._values import SCENARIO_PARAMETERS, SENSOR_PARAMETERS
 
 __all__ = ["DATASET_KEYS", "DTYPES", "LAYOUTS", "VALUES", "DatasetSpec", "dataset_section",
-           "output_cells", "read_dataset", "simulate", "simulate_one"]
+           "output_cells", "read_dataset", "simulate", "simulate_batch", "simulate_one"]
 
 DATASET_KEYS = ("input", "images", "gsd", "recursive", "output", "layout", "format", "values",
-                "dtype", "coco", "netcdf", "chunk_images", "seed", "noise")
+                "dtype", "coco", "netcdf", "chunk_images", "seed", "noise", "tile_size")
 #: "scenario-folders": one folder per scenario; "flat": one folder, the scenario in the name.
 LAYOUTS = ("scenario-folders", "flat")
 #: "counts": the camera's digital numbers; "radiometric": pyBSM's radiometric pixel mapping
@@ -74,6 +76,7 @@ class DatasetSpec:
     chunk_images: int = 8
     seed: int = 0
     noise: bool = True
+    tile_size: int | None = None  # reference pixels per tile side (simulate_image's default)
     base: str = "."  # the folder relative paths start from (the study file's)
 
     @property
@@ -109,7 +112,7 @@ def dataset_section(src: Source, doc: dict) -> DatasetSpec | None:
     for key in ("recursive", "coco", "noise"):
         if key in table and not isinstance(table[key], bool):
             raise src.error("dataset", key, f"must be true or false; got {shown(table[key])}")
-    for key, low in (("chunk_images", 1), ("seed", 0)):
+    for key, low in (("chunk_images", 1), ("seed", 0), ("tile_size", 64)):
         value = table.get(key, low)
         if isinstance(value, bool) or not isinstance(value, int) or value < low:
             raise src.error("dataset", key, f"must be a whole number >= {low}; got "
@@ -198,6 +201,43 @@ def output_seed(seed: int, image_position: int, cell_index: int) -> int:
     return (int(state[0]) << 32) | int(state[1])
 
 
+def simulate_batch(images, gsds, cell: Cell, spec: DatasetSpec, seeds, method) -> list:
+    """Images at one scenario, each with its own seed: (written array, Dataset) per image.
+
+    One :func:`xbsm.simulate_images` call: images of one shape and GSD are simulated
+    as a stack (one radiometry and blur for all), large ones in tiles of
+    ``spec.tile_size``; every output equals its image's :func:`simulate_one`. The
+    ``upsampled`` flag is left to the caller, who warns once per run.
+    """
+    from ..simulate import image as sim
+
+    counts = spec.values == "counts"
+    dtype = np.dtype(spec.out_dtype)
+    results = sim.simulate_images(images, cell.sensor, cell.scenario, gsd=list(gsds),
+                                  seeds=list(seeds), noise=spec.noise, method=method,
+                                  outputs=("counts",) if counts else ("noisy",),
+                                  counts_dtype=dtype if counts else None,
+                                  tile_size=spec.tile_size, warn_upsampled=False)
+    return [(_written(result, spec), result) for result in results]
+
+
+def _written(result, spec: DatasetSpec) -> np.ndarray:
+    """The array written for one output: the counts, or the radiometric pixel mapping."""
+    from ..simulate import inverse
+
+    dtype = np.dtype(spec.out_dtype)
+    if spec.values == "counts":
+        image = result["counts"]
+    else:
+        top = float(np.iinfo(dtype).max)
+        image = inverse.photoelectrons_to_pixels(result["noisy"], result,
+                                                 pixel_range=(0.0, top))
+    image = image.transpose("y", "x", ...).values
+    if spec.values != "counts":
+        image = np.rint(np.nan_to_num(image, nan=0.0)).astype(dtype)
+    return image
+
+
 def simulate_one(pixels, gsd: float, cell: Cell, spec: DatasetSpec, seed: int, method):
     """One image at one scenario: the written image's array and the simulation Dataset.
 
@@ -205,25 +245,16 @@ def simulate_one(pixels, gsd: float, cell: Cell, spec: DatasetSpec, seed: int, m
     the output's seed (all recorded in the COCO file) give the same pixels.
     """
     from ..simulate import image as sim
-    from ..simulate import inverse
 
-    dtype = np.dtype(spec.out_dtype)
     counts = spec.values == "counts"
+    dtype = np.dtype(spec.out_dtype)
     result = sim.simulate_image(pixels, cell.sensor, cell.scenario, gsd=gsd, seed=seed,
                                 noise=spec.noise, method=method,
                                 outputs=("counts",) if counts else ("noisy",),
                                 counts_dtype=dtype if counts else None,
+                                tile_size=spec.tile_size,
                                 warn_upsampled=False)  # once per run, from the flags
-    if counts:
-        image = result["counts"]
-    else:
-        top = float(np.iinfo(dtype).max)
-        image = inverse.photoelectrons_to_pixels(result["noisy"], result,
-                                                 pixel_range=(0.0, top))
-    image = image.transpose("y", "x", ...).values
-    if not counts:
-        image = np.rint(np.nan_to_num(image, nan=0.0)).astype(dtype)
-    return image, result
+    return _written(result, spec), result
 
 
 # --- the run's files -----------------------------------------------------------------
@@ -306,40 +337,47 @@ def _run_chunk(chunk: int, positions, dataset, cells, spec, method, out: Path, s
                digest: str, progress) -> int:
     """Simulate and write one chunk of images at every scenario; its record last."""
     outputs = []
-    for position in positions:
-        item = dataset[position]
-        pixels = item.pixels()
-        for cell in cells:
-            if INTERRUPTED.is_set():  # a signal: stop between two outputs
-                return chunk
-            seed = output_seed(spec.seed, position, cell.index)
-            image, result = simulate_one(pixels, item.gsd, cell, spec, seed, method)
-            name = _image_name(spec, item, cell)
-            path = out / name
-            path.parent.mkdir(parents=True, exist_ok=True)
-            writers.write_image(path, image, spec.format)
-            pixel_map = coco_labels.PixelMap.of(result)
-            code = int(result["flags"].values.max())
-            annotations, dropped = coco_labels.move_annotations(item, pixel_map, 0, 0)
-            outputs.append({
-                "position": position, "cell": cell.index, "file_name": name,
-                "bytes": path.stat().st_size, "sha256": _sha256(path),
-                "width": pixel_map.size_x, "height": pixel_map.size_y,
-                "annotations": annotations, "rle_dropped": dropped,
-                "xbsm": {
-                    "source_file": item.name, "source_id": item.id, "scenario": cell.labels,
-                    "seed": str(seed), "noise": spec.noise, "values": spec.values,
-                    "dtype": spec.out_dtype, "reference_gsd": item.gsd,
-                    **{k: float(result[k]) for k in ("gsd", "gsd_x", "gsd_y", "slant_range",
-                                                     "scale_x", "offset_x", "scale_y",
-                                                     "offset_y")},
-                    "flags": code, "flag_names": _flag_names(code)}})
-        if INTERRUPTED.is_set():
+    items = [dataset[position] for position in positions]
+    pixels = [item.pixels() for item in items]
+    for cell in cells:
+        if INTERRUPTED.is_set():  # a signal: stop between two scenarios
             return chunk
-        progress.add(len(cells))
+        seeds = [output_seed(spec.seed, position, cell.index) for position in positions]
+        made = simulate_batch(pixels, [item.gsd for item in items], cell, spec, seeds, method)
+        for position, item, seed, (image, result) in zip(positions, items, seeds, made,
+                                                         strict=True):
+            outputs.append(_write_output(out, spec, position, item, cell, seed, image, result))
+        progress.add(len(positions))
+    if INTERRUPTED.is_set():
+        return chunk
+    outputs.sort(key=lambda entry: (entry["position"], entry["cell"]))
     writers.write_json(_record_file(state, chunk), {"fingerprint": digest, "chunk": chunk,
                                                      "outputs": outputs})
     return chunk
+
+
+def _write_output(out: Path, spec, position: int, item, cell: Cell, seed: int, image,
+                  result) -> dict:
+    """One output image written; its record (metadata, moved labels, checksum)."""
+    name = _image_name(spec, item, cell)
+    path = out / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    writers.write_image(path, image, spec.format)
+    pixel_map = coco_labels.PixelMap.of(result)
+    code = int(result["flags"].values.max())
+    annotations, dropped = coco_labels.move_annotations(item, pixel_map, 0, 0)
+    return {
+        "position": position, "cell": cell.index, "file_name": name,
+        "bytes": path.stat().st_size, "sha256": _sha256(path),
+        "width": pixel_map.size_x, "height": pixel_map.size_y,
+        "annotations": annotations, "rle_dropped": dropped,
+        "xbsm": {
+            "source_file": item.name, "source_id": item.id, "scenario": cell.labels,
+            "seed": str(seed), "noise": spec.noise, "values": spec.values,
+            "dtype": spec.out_dtype, "reference_gsd": item.gsd,
+            **{k: float(result[k]) for k in ("gsd", "gsd_x", "gsd_y", "slant_range",
+                                             "scale_x", "offset_x", "scale_y", "offset_y")},
+            "flags": code, "flag_names": _flag_names(code)}}
 
 
 def _check_outputs(spec: DatasetSpec, dataset, cells, out: Path) -> None:
