@@ -404,15 +404,8 @@ def slice_terms_arrays(filtered, unfiltered, weights, abscissa, ifov, edge_otf: 
     """
     tables = None
     if error_weights is not None:  # one sine (and cosine) table for both OTFs
-        # square pixels: one orientation's table, broadcast against both in the contraction,
-        # is the same table at half the cost (the largest array of an optics sweep)
-        ifov = np.asarray(ifov)
-        square = (ifov.ndim > 0 and ifov.shape[-1] == 2 and filtered.shape[-1] == 2
-                  and (unfiltered is None or unfiltered.shape[-1] == 2)
-                  and bool((ifov[..., 0] == ifov[..., 1]).all()))
-        tables = _edge_tables(abscissa[..., None, :], ifov[..., :1] if square else ifov,
-                              cosine=edge_otf != "abs" and (
-                                  np.iscomplexobj(filtered) or np.iscomplexobj(unfiltered)))
+        tables = _edge_tables(abscissa[..., None, :], ifov, cosine=edge_otf != "abs" and (
+            np.iscomplexobj(filtered) or np.iscomplexobj(unfiltered)))
 
     def edge(system):
         system = np.abs(system) if edge_otf == "abs" else system
