@@ -516,7 +516,8 @@ def _simulate(image, sensor, scenario, *, gsd, seed, noise, method, components, 
         counts = _integer_counts(counts, counts_dtype, fill)
     images.update(blurred=blurred, noisy=noisy, counts=counts)
     return _assemble(images, samp, radiometry, psf, flags, im, outputs=outputs, attrs={
-        "seed": "per image" if isinstance(entropy, xr.DataArray) else str(entropy), "noise": "on" if noise else "off",
+        "seed": "per image" if isinstance(entropy, xr.DataArray) else str(entropy),
+        "noise": "on" if noise else "off",
         "components": " ".join(comps), "reference_gsd": str(gsd),
         **({"alpha": "dropped"} if alpha else {})})
 
@@ -549,8 +550,11 @@ in batches up to this size (about 4 million values, 32 MB per float64 copy)."""
 
 
 def _batches(images, gsds, tile_size):
-    """Lists of image indices simulated together: numpy images of one shape, dtype and GSD
-    (untiled, up to :data:`BATCH_PIXELS` values per batch), every other image alone."""
+    """Lists of image indices simulated together.
+
+    Numpy images of one shape, dtype and GSD go together (untiled, up to
+    :data:`BATCH_PIXELS` values per batch); every other image goes alone.
+    """
     groups, order = {}, []
     for i, (item, g) in enumerate(zip(images, gsds, strict=True)):
         key = None
