@@ -184,6 +184,8 @@ def interrupted_run(folder: Path, moment: str, late_after: float) -> dict:
             "last_line": err.strip().splitlines()[-1] if err.strip() else "",
             "images_on_disk_at_exit": images_before, "problems": problems,
             "resume_exit_code": resumed.returncode,
+            "resume_error": (resumed.stderr.strip().splitlines()[-1]
+                             if resumed.returncode and resumed.stderr.strip() else ""),
             "resume_notice": [line for line in resumed.stdout.splitlines()
                               if "resuming" in line or "complete" in line]}
 
