@@ -92,7 +92,9 @@ def test_images_larger_than_a_tile_are_simulated_alone_in_tiles(calls):
     assert calls == [1, 1]
     tiled = xbsm.simulate_image(images[1], SENSOR, SCENARIO, gsd=GSD, noise=False,
                                 tile_size=64, outputs=("blurred",))
-    xr.testing.assert_identical(out[1].drop_attrs(), tiled.drop_attrs())
+    # equal but for the attributes (the seed differs; not Dataset.drop_attrs: xarray
+    # 2023.12, the floor, lacks it)
+    xr.testing.assert_equal(out[1], tiled)
 
 
 def test_the_seeds_are_checked():
