@@ -396,14 +396,16 @@ def tile_core(taps, axis, size, tile):
     return int(min(max(-(-size // count) + 2 * span, span), size, max(tile, span)))
 
 
-def _kernel(optics, angle, halo: int) -> xr.DataArray:
-    """The middle (2 halo + 1)^2 samples of the kernel on a grid of its own.
+def _kernel(optics, angle, halo: int):
+    """The middle (2 halo + 1)^2 samples of the kernel on a grid of its own, and its sum.
 
     The grid does not depend on the tile, so tiles of any size join the same way (its
-    wrapped-around wings start 3 halo from the centre).
+    wrapped-around wings start 3 halo from the centre). The sum of the whole kernel is
+    the OTF at zero frequency.
     """
     own = fft.next_fast_len(4 * halo + 2, real=True)
-    return kernel_from_otf(otf_rfft_grid(optics, angle, own, own), own, halo)
+    otf = otf_rfft_grid(optics, angle, own, own)
+    return kernel_from_otf(otf, own, halo), otf.isel(fy=0, fx=0).real
 
 
 def tile_halo(optics, angle, half: int, shape):
@@ -433,10 +435,7 @@ def tile_halo(optics, angle, half: int, shape):
     halo = min(TILE_HALO_FACTOR * half, max(shape))
     top = max(TILE_HALO_MAX, halo)
     while True:
-        own = fft.next_fast_len(4 * halo + 2, real=True)
-        otf = otf_rfft_grid(optics, angle, own, own)
-        psf = kernel_from_otf(otf, own, halo)
-        total = otf.isel(fy=0, fx=0).real
+        psf, total = _kernel(optics, angle, halo)
         wing = float((total - psf.sum(("psf_y", "psf_x"))).max())
         if wing <= TILE_WING_TOLERANCE or halo >= top:
             return halo, wing
@@ -465,7 +464,7 @@ def tiled_psf(optics, angle, halo: int, core_y: int, core_x: int):
         ``next_fast_len(core + 2 halo)`` samples per axis. [1]
     """
     grid = tuple(fft.next_fast_len(c + 2 * halo, real=True) for c in (core_y, core_x))
-    psf = _kernel(optics, angle, halo)
+    psf, _ = _kernel(optics, angle, halo)
 
     def spectrum(k):
         placed = np.zeros(k.shape[:-2] + grid)
