@@ -436,11 +436,21 @@ def _turbulence_xy_kernel(wavelength, coherence_diameter, fx, fy, exposure_coeff
 
 
 def _turbulence_kernel(radial, wavelength, aperture_diameter, coherence_diameter,
-                       exposure_coefficient):
-    """IBSM Eq. 3-3 on plain arrays, at radial frequency ``radial`` >= 0 [cycles/rad]."""
-    long_exposure = -3.44 * (wavelength / coherence_diameter * radial) ** (5.0 / 3.0)
+                       exposure_coefficient, long_exposure=None):
+    """IBSM Eq. 3-3 on plain arrays, at radial frequency ``radial`` >= 0 [cycles/rad].
+
+    ``long_exposure`` is the exponent of the long-exposure OTF,
+    :func:`_long_exposure_exponent` (computed here if not given).
+    """
+    if long_exposure is None:
+        long_exposure = _long_exposure_exponent(radial, wavelength, coherence_diameter)
     return np.exp(long_exposure * (1.0 - exposure_coefficient
                                    * (wavelength / aperture_diameter * radial) ** (1.0 / 3.0)))
+
+
+def _long_exposure_exponent(radial, wavelength, coherence_diameter):
+    """``-3.44 (lambda f / r0)^(5/3)``, the logarithm of the long-exposure turbulence OTF."""
+    return -3.44 * (wavelength / coherence_diameter * radial) ** (5.0 / 3.0)
 
 
 @contract(wavelength=WAVELENGTH, aperture_diameter=APERTURE_DIAMETER,
@@ -492,10 +502,12 @@ def _wind_blended_xy_kernel(wind_speed, integration_time, coherence_diameter, wa
 def _wind_blended_kernel(radial, wavelength, aperture_diameter, coherence_diameter,
                          integration_time, wind_speed):
     """IBSM Eq. 3-9 on plain arrays, at radial frequency ``radial`` >= 0 [cycles/rad]."""
-    radial = np.asarray(radial, dtype=float)
-    return _factored_wind_blended(radial ** (5.0 / 3.0), np.cbrt(radial), wavelength,
-                                  aperture_diameter, coherence_diameter, integration_time,
-                                  wind_speed)
+    weight = np.exp(-wind_speed * integration_time / coherence_diameter)
+    exponent = _long_exposure_exponent(radial, wavelength, coherence_diameter)
+    short = _turbulence_kernel(radial, wavelength, aperture_diameter, coherence_diameter, 0.5,
+                               exponent)
+    long = np.exp(exponent)  # Eq. 3-3 at exposure coefficient 0: its factor is exactly 1
+    return weight * short + (1.0 - weight) * long
 
 
 @contract(aperture_diameter=APERTURE_DIAMETER, coherence_diameter=LENGTH,
