@@ -5,6 +5,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -145,6 +146,49 @@ def test_a_signal_inside_a_write_waits_for_the_end_of_it(signum, code):
         assert signal.getsignal(signum) is default  # the handler is put back
     finally:
         signal.signal(signum, before)
+        interrupts.INTERRUPTED.clear()
+
+
+def test_a_signal_after_the_result_is_in_place_does_not_make_the_run_interrupted():
+    # issue 26: a Ctrl-C that landed after a run's completion marker turned a complete run
+    # into "interrupted; run the same command again to resume", and the resume was refused
+    # as complete. After completing() the signal is recorded, raised only where a caller
+    # checks (xbsm run's figures), and a new run starts with a clean slate
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    reached = []
+    try:
+        with interrupts.handling_signals():
+            with interrupts.completing():
+                os.kill(os.getpid(), signal.SIGINT)  # during the last rename: waits
+                reached.append("the result in place")
+            os.kill(os.getpid(), signal.SIGINT)  # after it: recorded, not raised
+            reached.append("the lock released")
+            with pytest.raises(interrupts.Interrupted):
+                interrupts.stop_if_interrupted()  # an explicit check still stops
+        assert reached == ["the result in place", "the lock released"]
+        with interrupts.handling_signals():  # the next run: interruptible again
+            with pytest.raises(interrupts.Interrupted):
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(1)  # the handler runs between bytecodes, before this ends
+    finally:
+        signal.signal(signal.SIGINT, before)
+        interrupts.INTERRUPTED.clear()
+
+
+def test_a_signal_inside_completing_that_fails_still_stops_the_run():
+    # a failed final rename is no result: the run is not complete, the signal stops it
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with interrupts.handling_signals():
+            with pytest.raises(OSError):
+                with interrupts.completing():
+                    os.kill(os.getpid(), signal.SIGINT)
+                    raise OSError("rename refused")
+            with pytest.raises(interrupts.Interrupted):
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(1)
+    finally:
+        signal.signal(signal.SIGINT, before)
         interrupts.INTERRUPTED.clear()
 
 

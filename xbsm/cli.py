@@ -268,7 +268,9 @@ def main(argv=None) -> int:
     """Entry point of the ``xbsm`` command."""
     parser = _parser()
     args = parser.parse_args(argv)
-    with handling_signals():
+    # the command itself ignores signals once its outcome is decided (a Ctrl-C while the
+    # interpreter shuts down is no traceback); a caller's main([...]) gets its own back
+    with handling_signals(until_exit=argv is None):
         try:
             from .study import StudyError  # the heavy imports, under the handlers
             from .study.store import WriteFailed

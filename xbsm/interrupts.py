@@ -9,6 +9,11 @@ signals itself (:func:`handling_signals`): the handler records the signal in
 stops at its next check (:func:`stop_if_interrupted`), between two writes.
 The threads computing chunks never see signals; they check the same flag after
 each saved chunk.
+
+A run whose result is in place has succeeded (:func:`completing`): a signal that
+arrives after that (while the lock is released, the command returns or the
+interpreter exits) is recorded, never turned into an "interrupted" run, which
+would send the user to resume a run that is complete.
 """
 
 from __future__ import annotations
@@ -20,7 +25,7 @@ import threading
 INTERRUPTED = threading.Event()
 """Set when SIGINT or SIGTERM arrived during a run (checked between writes)."""
 
-_state = {"deferred": 0, "signal": None, "depth": 0}
+_state = {"deferred": 0, "signal": None, "depth": 0, "complete": False}
 
 
 class Interrupted(KeyboardInterrupt):
@@ -43,10 +48,10 @@ def stop_if_interrupted() -> None:
 
 
 def _on_signal(signum, frame):
-    """Record the signal; raise at once unless a write is in progress."""
+    """Record the signal; raise at once unless a write is in progress or the run complete."""
     _state["signal"] = signum
     INTERRUPTED.set()
-    if not _state["deferred"]:
+    if not _state["deferred"] and not _state["complete"]:
         raise Interrupted(signum)
 
 
@@ -66,14 +71,36 @@ def deferred():
 
 
 @contextlib.contextmanager
-def handling_signals(signals=(signal.SIGINT, signal.SIGTERM)):
+def completing():
+    """The section that puts a run's result in place (its last rename or marker file).
+
+    A signal during it waits for it, as in :func:`deferred`. When it ends without an
+    error the result is whole and the run has succeeded: from then on a signal is
+    recorded but not raised where it lands. Only an explicit check
+    (:func:`stop_if_interrupted`, the end of a :func:`deferred` section, such as the
+    figures ``xbsm run`` draws after its result) still stops the command.
+    """
+    _state["deferred"] += 1
+    try:
+        yield
+        _state["complete"] = True
+    finally:
+        _state["deferred"] -= 1
+
+
+@contextlib.contextmanager
+def handling_signals(signals=(signal.SIGINT, signal.SIGTERM), *, until_exit=False):
     """Handle ``signals`` as described above for the duration of a run.
 
     Only in the main thread (the only one Python delivers signals to), and only
     for signals whose handler is Python's default (a signal the caller ignores
     or handles itself is left alone). The previous handlers come back at the end.
     Nested sections (the command around :func:`xbsm.study.write`) share one flag,
-    cleared only when the outermost begins.
+    cleared only when the outermost begins. ``until_exit``: the command itself, whose
+    process ends with the section: its signals are ignored from then on. The
+    command's outcome is decided and on disk; a signal while the interpreter exits
+    would otherwise print a traceback, or kill the process (Python restores the
+    default action for its last moments) after a complete run.
     """
     previous = {}
     if threading.current_thread() is threading.main_thread():
@@ -85,10 +112,11 @@ def handling_signals(signals=(signal.SIGINT, signal.SIGTERM)):
     if not _state["depth"]:
         INTERRUPTED.clear()
         _state["signal"] = None
+        _state["complete"] = False
     _state["depth"] += 1
     try:
         yield
     finally:
         _state["depth"] -= 1
         for signum, handler in previous.items():
-            signal.signal(signum, handler)
+            signal.signal(signum, signal.SIG_IGN if until_exit else handler)

@@ -1,4 +1,4 @@
-"""Interrupt and resume an image-dataset study (`xbsm simulate`) at 5 moments.
+"""Interrupt and resume an image-dataset study (`xbsm simulate`) at 6 moments.
 
 A labelled synthetic dataset (24 images of mixed sizes, grey and RGB, a box and two
 keypoints each, a COCO file) over 3 ranges (72 outputs, 16-bit PNG, a COCO file per
@@ -10,13 +10,18 @@ again from scratch for each moment, with SIGINT sent:
 3. ``half``: when the progress line says half the outputs are done;
 4. ``assembly``: as soon as every chunk's record is written (the COCO files and the
    NetCDF table being assembled);
-5. ``late``: 1.5 s after the ``half`` moment of the reference run's timing.
+5. ``late``: 1.5 s after the ``half`` moment of the reference run's timing;
+6. ``completion``: as soon as the run's completion marker appears (the run releasing
+   its lock and returning: a signal here once made a complete run "interrupted", and
+   the resume was then refused as complete).
 
-For each: the exit code (130, or 0 if the run finished first), the seconds from the
-signal to the exit (no hang: at most 60), then every file that has its final name is
+For each: the exit code (130, or 0 exactly when the run is complete: it finished
+before the signal, or the signal landed after its completion marker), the seconds from
+the signal to the exit (no hang: at most 60), then every file that has its final name is
 checked (each image decodes whole; a COCO file, which is written only after every
 chunk, so that the run may stop between two scenarios' files, must list every image of
-its scenario, each written), and the run is resumed by running the same command again. The resumed
+its scenario, each written), and the run is resumed by running the same command again
+(refused as complete after an exit 0, which is no problem; any other failure is). The resumed
 outputs (every image, every COCO file; the NetCDF table's values) must equal the
 reference byte for byte. Results to ``docs/benchmarks/interrupt_dataset.json``;
 ``docs/datasets.md`` quotes them. Run from the repository root (the ``datasets``
@@ -44,7 +49,7 @@ from _provenance import commit, machine
 
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "docs" / "benchmarks" / "interrupt_dataset.json"
-MOMENTS = ("startup", "first image", "half", "assembly", "late")
+MOMENTS = ("startup", "first image", "half", "assembly", "late", "completion")
 IMAGES = 24
 
 STUDY = '''
@@ -164,8 +169,11 @@ def interrupted_run(folder: Path, moment: str, late_after: float) -> dict:
         chunks = out / ".xbsm-run" / "chunks"
         wait_for(lambda: chunks.is_dir() and len(list(chunks.glob("chunk-*.json")))
                  >= IMAGES // 2)
-    else:
+    elif moment == "late":
         time.sleep(late_after + 1.5)
+    else:
+        marker = out / ".xbsm-run" / "complete.json"
+        wait_for(marker.is_file, limit=900.0)
     signalled = time.monotonic()
     proc.send_signal(signal.SIGINT)
     try:
@@ -178,11 +186,20 @@ def interrupted_run(folder: Path, moment: str, late_after: float) -> dict:
     exit_s = time.monotonic() - signalled
     problems = nothing_partial(out) if out.exists() else []
     images_before = len(list(out.rglob("img*.png"))) if out.exists() else 0
+    complete = (out / ".xbsm-run" / "complete.json").is_file()
+    # the exit code tells the truth: 0 exactly when the run is complete (then the same
+    # command again is refused as complete), 130 when it is not (then it resumes)
+    if complete != (proc.returncode == 0):
+        problems.append(f"exit code {proc.returncode} with the run "
+                        f"{'complete' if complete else 'unfinished'}")
     resumed = subprocess.run(command(folder), capture_output=True, text=True, timeout=900)
+    if resumed.returncode and not (complete and "is complete" in resumed.stderr):
+        problems.append(f"the same command again exited {resumed.returncode}")
     return {"moment": moment, "signal_after_s": signalled - started,
             "exit_code": proc.returncode, "exit_after_signal_s": exit_s, "hung": hung,
             "last_line": err.strip().splitlines()[-1] if err.strip() else "",
-            "images_on_disk_at_exit": images_before, "problems": problems,
+            "images_on_disk_at_exit": images_before, "complete_at_exit": complete,
+            "problems": problems,
             "resume_exit_code": resumed.returncode,
             "resume_error": (resumed.stderr.strip().splitlines()[-1]
                              if resumed.returncode and resumed.stderr.strip() else ""),

@@ -590,6 +590,44 @@ def test_a_swallowed_ctrl_c_still_stops_the_run(tiny, tmp_path, monkeypatch):
     assert len(list((tmp_path / "out.nc.parts").glob("*.npz"))) == 1  # its work kept
 
 
+@pytest.mark.parametrize("window", ["during the rename", "after it"])
+def test_a_ctrl_c_once_the_file_is_in_place_leaves_a_finished_run(tiny, tmp_path, monkeypatch,
+                                                                  window):
+    # issue 26: a signal that landed after OUT.nc had its name made the run "interrupted"
+    # (resume, which then refused: "exists"). Once the file is in place the run has
+    # succeeded: write returns the path, the lock and the parts are gone
+    import os
+    import signal
+
+    real_replace, real_rmtree = os.replace, store.shutil.rmtree
+
+    def replace_then_signal(src, dst):  # (os.replace: the chunk files' too)
+        real_replace(src, dst)
+        if str(dst).endswith("out.nc"):
+            os.kill(os.getpid(), signal.SIGINT)
+
+    def signal_then_rmtree(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)
+        real_rmtree(*args, **kwargs)
+
+    if window == "during the rename":
+        monkeypatch.setattr(store.os, "replace", replace_then_signal)
+    else:
+        monkeypatch.setattr(store.shutil, "rmtree", signal_then_rmtree)
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        out = study.write(study.run(tiny), tmp_path / "out.nc", scheduler="synchronous")
+    except interrupts.Interrupted:  # (a KeyboardInterrupt would stop the whole test run)
+        pytest.fail("a run whose file was in place was reported interrupted")
+    finally:
+        signal.signal(signal.SIGINT, before)
+        interrupts.INTERRUPTED.clear()
+    assert out.exists() and not (tmp_path / "out.nc.parts").exists()
+    assert not (tmp_path / "out.nc.lock").exists()
+    with xr.open_dataset(out) as ds:
+        assert ds.niirs.notnull().all()
+
+
 def test_written_result_records_its_fixed_parameters_for_the_figures(tmp_path):
     # xbsm.study.attributes: the parameters of the study file below, read back from the
     # NetCDF file without parsing the study text (a curve, a kernel and two bands)

@@ -36,7 +36,13 @@ from .. import flags as fl
 from .. import params
 from ..datasets import coco as coco_labels
 from ..datasets import readers, writers
-from ..interrupts import INTERRUPTED, deferred, handling_signals, stop_if_interrupted
+from ..interrupts import (
+    INTERRUPTED,
+    completing,
+    deferred,
+    handling_signals,
+    stop_if_interrupted,
+)
 from ._lock import OutputLock
 from ._parts import code_checksum
 from ._progress import Progress
@@ -625,7 +631,8 @@ def simulate(study, out=None, *, dataset=None, overwrite=False, workers=None, pr
                  workers or study.workers, progress)
         stop_if_interrupted()
         _assemble(out, state, spec, dataset, cells, len(chunks), study, say)
-        writers.write_json(state / "complete.json", {"fingerprint": digest})
+        with completing():  # from here a signal no longer makes the run "interrupted"
+            writers.write_json(state / "complete.json", {"fingerprint": digest})
     return out
 
 

@@ -30,7 +30,7 @@ import numpy as np
 import xarray as xr
 from dask.highlevelgraph import HighLevelGraph
 
-from ..interrupts import deferred, handling_signals, stop_if_interrupted
+from ..interrupts import completing, deferred, handling_signals, stop_if_interrupted
 from . import _parts
 from ._lock import OutputLock
 from ._parts import atmosphere_checksum, code_commit, stderr_line
@@ -329,7 +329,8 @@ def _assemble(result, grid, parts, print_, path: Path, progress: bool) -> None:
                 "writing the NetCDF file", grid.count, enabled=progress))
             with open(partial, "rb+") as handle:
                 os.fsync(handle.fileno())
-        os.replace(partial, path)
+        with completing():  # from here a signal no longer makes the run "interrupted"
+            os.replace(partial, path)
     except (OSError, RuntimeError) as err:
         partial.unlink(missing_ok=True)
         raise WriteFailed(_write_error(partial, err)) from None
