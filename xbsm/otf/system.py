@@ -12,8 +12,6 @@ evaluated once on the radial frequency and shared by the x and y slices.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import xarray as xr
 
@@ -149,8 +147,12 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
                                                slant_range, method)
     unfiltered = apply_kernel(_product_kernel, *parts.values())
     fil = _filter(s, fx, fy_, method)
-    system = apply_kernel(np.multiply, unfiltered, fil,
-                       dtype=np.result_type(unfiltered.dtype, fil.dtype))
+    if _filter_rule(_kernel_of(s), method.filter_otf) is None:
+        # times exactly 1: the same numbers, so the same array (no full-size copy)
+        system = unfiltered.copy(deep=False)
+    else:
+        system = apply_kernel(np.multiply, unfiltered, fil,
+                              dtype=np.result_type(unfiltered.dtype, fil.dtype))
     return dataset({
         **{name: _otf(part, f"{name} OTF") for name, part in parts.items()},
         "filter": _otf(fil, "post-processing filter OTF"),
@@ -304,7 +306,23 @@ def _normalised(weights):
 
 
 def _product_kernel(*factors):
-    return math.prod(factors)
+    """The factors' product, left to right (the bits of ``math.prod``), in one buffer.
+
+    Once a partial product is an array of its own with the full shape and dtype, the
+    remaining factors multiply into it: a study chunk's product (50,000 scenarios x 2
+    slices x 195 nodes, 156 MB) is allocated once instead of once per factor after the
+    first full-size one.
+    """
+    product, owned = factors[0], False
+    for factor in factors[1:]:
+        if owned and np.shape(product) == np.broadcast_shapes(np.shape(product),
+                                                              np.shape(factor)) \
+                and np.result_type(product, factor) == product.dtype:
+            np.multiply(product, factor, out=product)
+        else:
+            product = product * factor
+            owned = isinstance(product, np.ndarray)  # a new array, no caller's
+    return product
 
 
 def _ones_kernel(fx, fy):
@@ -327,10 +345,15 @@ def _filter_rule(kernel: np.ndarray, filter_otf: str):
     return None if identity or (filter_otf == "pybsm" and kernel.shape[0] == 1) else filter_otf
 
 
+def _kernel_of(sensor) -> np.ndarray:
+    """The sensor's filter kernel as (kernel_y, kernel_x) floats."""
+    return np.asarray(sensor["filter_kernel"].transpose("kernel_y", "kernel_x").values,
+                      dtype=float)
+
+
 def _filter(sensor, fx, fy, method: Method):
     """The post-processing filter OTF, or exactly 1 when there is no filter."""
-    k = np.asarray(sensor["filter_kernel"].transpose("kernel_y", "kernel_x").values,
-                   dtype=float)
+    k = _kernel_of(sensor)
     if _filter_rule(k, method.filter_otf) is None:
         return apply_kernel(_ones_kernel, fx, fy)
     pitch_x, pitch_y, focal = (sensor[n] for n in ("pixel_pitch_x", "pixel_pitch_y",
