@@ -152,6 +152,23 @@ def test_file_coordinates_units_and_provenance():
     assert attrs["modtran_PARM2"].startswith("50")
 
 
+def test_atmosphere_at_names_the_database_it_read(tmp_path):
+    # its ``source`` attribute comes from the file read (its title and name); it said
+    # MODTRAN whatever the file was. A copy retitled as a 6S file says so
+    import shutil
+
+    shipped = atm.atmosphere_at(9000.0, 1000.0, 23.0)
+    assert shipped.attrs["source"].startswith("MODTRAN 5.2.1 radiative-transfer database of "
+                                              "pyBSM 0.16.1")
+    assert shipped.attrs["source"].endswith("(atmosphere.nc)")
+    copy = tmp_path / "other.nc"
+    shutil.copy(atm.database_path(), copy)
+    with netCDF4.Dataset(copy, "a") as nc:
+        nc.title = "6S tables of a user"
+    assert atm.atmosphere_at(9000.0, 1000.0, 23.0, path=copy).attrs["source"] == \
+        "6S tables of a user (other.nc)"
+
+
 # --- open_atmosphere ---------------------------------------------------------------------
 
 

@@ -366,6 +366,8 @@ class Database:
     #: ``i`` is ``numpy.unravel_index(i, (*sizes of the conditions, visibility.size))``, so
     #: without conditions it is the visibility axis.
     conditions: tuple = ()
+    #: The file's ``title`` attribute: what made it (MODTRAN, 6S, a user's tables).
+    title: str = ""
 
 
 def load_database(path=None) -> Database:
@@ -411,6 +413,7 @@ def _read(path: str, stamp=None) -> Database:
                       for name in ("visibility", "altitude", "ground_range", "wavelength")}
             conditions = tuple((name, np.asarray(nc[name][...], dtype=np.float64))
                                for name in nc["atmosphere"].dimensions[:-5])
+            title = str(getattr(nc, "title", ""))
     except OSError as err:
         raise ValueError(f"path {path!r} is not an xbsm atmosphere database: it cannot be "
                          "read as a NetCDF file (the database is the NetCDF file "
@@ -429,7 +432,7 @@ def _read(path: str, stamp=None) -> Database:
     present = ~np.isnan(cube[:, :, :, 0, 0])
     cube.setflags(write=False)
     present.setflags(write=False)
-    return Database(cube=cube, present=present, conditions=conditions, **coords)
+    return Database(cube=cube, present=present, conditions=conditions, title=title, **coords)
 
 
 def database_visibilities(path=None) -> tuple:

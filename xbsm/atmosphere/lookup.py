@@ -86,8 +86,8 @@ def _validate(altitude, ground_range, visibility, rule, db, conditions=()):
         bad = ~((values >= nodes[0]) & (values <= nodes[-1]))
         if bad.any():
             raise ValueError(
-                f"{name} must be within [{nodes[0]:g}, {nodes[-1]:g}] {units} (the MODTRAN "
-                f"database range); got {float(values[bad].flat[0])!r}"
+                f"{name} must be within [{nodes[0]:g}, {nodes[-1]:g}] {units} (the "
+                f"atmosphere database's range); got {float(values[bad].flat[0])!r}"
             )
         if rule.nodes_only:
             off = ~np.isin(values, nodes)
@@ -506,7 +506,7 @@ def atmosphere_at(altitude, ground_range, visibility, *, interpolation=None,
     flags.attrs = flag_attrs("atmosphere validity flags")
     out = dataset({**data, "flags": flags})
     return out.assign_attrs(
-        source="MODTRAN 5.2.1 database of pyBSM 0.16.1 (xbsm atmosphere.nc)",
+        source=f"{db.title or 'atmosphere database'} ({database_path(path).name})",
         interpolation=interpolation,
     )
 
