@@ -132,18 +132,47 @@ def _edge_terms_error_kernel(otf, weights, error_weights, abscissa, ifov, tables
         tables = _edge_tables(abscissa, ifov, cosine=np.iscomplexobj(otf))
     sine, cosine = tables
     with np.errstate(all="ignore"):  # IEEE results without warnings, as xarray's arithmetic
+        # both rules' weights in one table (positions: the rule's, then the error's), so
+        # the OTF, the largest array, is read once, by a matrix product
+        def weighted(table):
+            return np.concatenate([weights[..., None, :] * table,
+                                   error_weights[..., None, :] * table], axis=-2)
 
-        def contract(w):
-            weighted = (otf * w)[..., None, :]
-            if not np.iscomplexobj(otf):
-                return _sum_of_products(weighted, sine) / np.pi
-            return (_sum_of_products(weighted.real, sine)
-                    + _sum_of_products(weighted.imag, cosine)) / np.pi
-
-        er, d = 0.5 + contract(weights), contract(error_weights)
+        both = _contract(otf.real, weighted(sine))
+        if np.iscomplexobj(otf):
+            both = both + _contract(otf.imag, weighted(cosine))
+        both = both / np.pi
+        p = sine.shape[-2]
+        er, d = 0.5 + both[..., :p], both[..., p:]
         n = RER_POSITIONS.size
         return (er[..., 1] - er[..., 0], _eho_kernel(er[..., n:]), np.abs(d[..., 1] - d[..., 0]),
                 np.abs(d[..., n:]).max(axis=-1))
+
+
+def _contract(values, table):
+    """``sum_k values[..., k] table[..., p, k]`` as a matrix product per distinct table.
+
+    ``table``'s leading axes broadcast against ``values``'; where it varies (an optical
+    state's nodes, the orientation) the values are grouped by table, and each group is one
+    (scenarios x k) by (k x p) product: the values are read once (einsum of the broadcast
+    operands took 0.7 of a 1.8 s study chunk).
+    """
+    if values.size <= 1 << 14:  # one scenario: einsum's few microseconds, not the setup's
+        return np.einsum("...k,...pk->...p", values, table)
+    lead = np.broadcast_shapes(values.shape[:-1], table.shape[:-2])
+    k, p = table.shape[-1], table.shape[-2]
+    table = table.reshape((1,) * (len(lead) + 2 - table.ndim) + table.shape)
+    varies = [axis for axis in range(len(lead)) if table.shape[axis] > 1]
+    rest = [axis for axis in range(len(lead)) if table.shape[axis] == 1]
+    order = varies + rest
+    grouped = np.broadcast_to(values, (*lead, k)).transpose(*order, len(lead))
+    groups = math.prod(lead[a] for a in varies)
+    rows = np.reshape(grouped, (groups, -1, k))
+    tables = np.reshape(table.transpose(*order, len(lead), len(lead) + 1)[
+        (slice(None),) * len(varies) + (0,) * len(rest)], (groups, p, k))
+    out = np.matmul(rows, np.swapaxes(tables, -1, -2))  # (groups, rows, p)
+    out = out.reshape(*(lead[a] for a in order), p)
+    return np.moveaxis(out, range(len(lead)), order)
 
 
 def _edge_tables(abscissa, ifov, cosine: bool):
