@@ -66,11 +66,16 @@ def sinc(x):
     x = np.asarray(x, dtype=float)
     if x.size <= BLOCK:
         return _sinc_block(x)
-    flat = x.reshape(-1)
-    out = np.empty(flat.shape)
+    # in memory order: the blocks of a product whose axes are permuted (a drift OTF's
+    # argument) are views, and the result keeps the argument's layout
+    out = np.empty_like(x)
+    flat, flat_out = x.ravel(order="K"), out.ravel(order="K")
+    if not (np.shares_memory(flat, x) and np.shares_memory(flat_out, out)):
+        flat, out = x.reshape(-1), np.empty(x.shape)  # not dense: C order, copied
+        flat_out = out.reshape(-1)
     for start in range(0, flat.size, BLOCK):
-        out[start:start + BLOCK] = _sinc_block(flat[start:start + BLOCK])
-    return out.reshape(x.shape)
+        flat_out[start:start + BLOCK] = _sinc_block(flat[start:start + BLOCK])
+    return out
 
 
 def _sinc_block(x):

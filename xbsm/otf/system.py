@@ -308,21 +308,43 @@ def _normalised(weights):
 def _product_kernel(*factors):
     """The factors' product, left to right (the bits of ``math.prod``), in one buffer.
 
-    Once a partial product is an array of its own with the full shape and dtype, the
-    remaining factors multiply into it: a study chunk's product (50,000 scenarios x 2
-    slices x 195 nodes, 156 MB) is allocated once instead of once per factor after the
-    first full-size one.
+    Once the product has its full shape it is one array of ours, in the memory layout of
+    the full-size factor (the drift OTF of a study chunk: 50,000 scenarios x 2 slices x
+    195 nodes, 156 MB), and every factor multiplies into it; the smaller factors are
+    first copied into that layout, so the large arrays are read and written in order (the
+    strided product took 0.11 s of such a chunk, in order 0.03 s, and one 156 MB array
+    instead of one per factor).
     """
+    shape = np.broadcast_shapes(*(np.shape(f) for f in factors))
+    template = next((f for f in factors if isinstance(f, np.ndarray) and f.shape == shape
+                     and f.ndim > 1), None)
     product, owned = factors[0], False
     for factor in factors[1:]:
-        if owned and np.shape(product) == np.broadcast_shapes(np.shape(product),
-                                                              np.shape(factor)) \
-                and np.result_type(product, factor) == product.dtype:
-            np.multiply(product, factor, out=product)
+        if owned and np.result_type(product, factor) == product.dtype:
+            np.multiply(product, _in_layout(factor, template), out=product)
+        elif template is not None and np.broadcast_shapes(np.shape(product),
+                                                          np.shape(factor)) == shape:
+            out = np.empty_like(template, dtype=np.result_type(product, factor))
+            product = np.multiply(_in_layout(product, template), _in_layout(factor, template),
+                                  out=out)
+            owned = True
         else:
             product = product * factor
-            owned = isinstance(product, np.ndarray)  # a new array, no caller's
     return product
+
+
+def _in_layout(a, template: np.ndarray):
+    """``a`` (broadcastable to ``template``) copied into ``template``'s memory order.
+
+    Size 1 along the axes it broadcasts on; a scalar or a full-size array as it is.
+    """
+    if np.ndim(a) == 0 or (isinstance(a, np.ndarray) and a.shape == template.shape):
+        return a
+    a = np.reshape(a, (1,) * (template.ndim - np.ndim(a)) + np.shape(a))
+    view = template[tuple(slice(0, 1) if n == 1 else slice(None) for n in a.shape)]
+    out = np.empty_like(view, dtype=a.dtype)
+    out[...] = a
+    return out
 
 
 def _ones_kernel(fx, fy):
