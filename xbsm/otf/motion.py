@@ -76,12 +76,19 @@ def drift(fx, fy, drift_x, drift_y):
 
 def drift_kernel(drift_x, fx, drift_y, fy):
     """IBSM Eq. 3-29 on plain arrays (arguments in the order of the result's dims)."""
-    along_x, along_y = sinc(drift_x * fx), sinc(drift_y * fy)
+    along_x, along_y = _drift_sinc(drift_x, fx), _drift_sinc(drift_y, fy)
     if np.ndim(along_x) and np.shape(along_x) == np.broadcast_shapes(np.shape(along_x),
                                                                      np.shape(along_y)):
         along_x *= along_y  # into the new array: no third full-size one
         return along_x
     return along_x * along_y
+
+
+def _drift_sinc(drift, frequency):
+    """sinc(drift f); without drift (every value 0, a still camera) the 1 it is, unevaluated."""
+    if np.ndim(drift) and not np.any(drift):  # (an optics study: 25,000 scenarios' sincs of 0)
+        return np.ones(np.broadcast_shapes(np.shape(drift), np.shape(frequency)))
+    return sinc(drift * frequency)
 
 
 @contract(detector_width=LENGTH, focal_length=FOCAL_LENGTH, rate_ratio=POSITIVE_NUMBER,
