@@ -151,6 +151,8 @@ def _edge_terms_error_kernel(otf, weights, error_weights, abscissa, ifov, tables
 
 #: Bytes of the values regrouped at a time, so that the regrouping copy stays in cache.
 CONTRACT_BLOCK_BYTES = 1 << 22
+#: Scenarios sharing a table below which the values are contracted where they lie.
+CONTRACT_MIN_ROWS = 64
 
 
 def _contract(values, table):
@@ -160,15 +162,17 @@ def _contract(values, table):
     state's nodes, the orientation) the values are grouped by table, and each group is one
     (scenarios x k) by (k x p) product: the values are read once (einsum of the broadcast
     operands took 0.7 of a 1.8 s study chunk). Large values go in blocks along their
-    outermost axis in memory, so that grouping them copies from cache.
+    outermost axis in memory, so that grouping them copies from cache. Where few scenarios
+    share a table, einsum contracts them where they lie.
     """
-    if values.size <= 1 << 14:  # one scenario: einsum's few microseconds, not the setup's
-        return np.einsum("...k,...pk->...p", values, table)
     lead = np.broadcast_shapes(values.shape[:-1], table.shape[:-2])
-    values = np.broadcast_to(values, (*lead, values.shape[-1]))
     table = table.reshape((1,) * (len(lead) + 2 - table.ndim) + table.shape)
     shared = [axis for axis in range(len(lead)) if table.shape[axis] == 1 and lead[axis] > 1]
-    if values.nbytes <= CONTRACT_BLOCK_BYTES or not shared:
+    if math.prod(lead[axis] for axis in shared) < CONTRACT_MIN_ROWS:
+        # one scenario, or a table per scenario (an optics sweep): nothing to group
+        return np.einsum("...k,...pk->...p", values, table)
+    values = np.broadcast_to(values, (*lead, values.shape[-1]))
+    if values.nbytes <= CONTRACT_BLOCK_BYTES:
         return _contract_grouped(values, table)
     outer = max(shared, key=lambda axis: abs(values.strides[axis]))
     step = max(1, lead[outer] * CONTRACT_BLOCK_BYTES // values.nbytes)
@@ -191,9 +195,29 @@ def _contract_grouped(values, table):
     rows = np.reshape(values.transpose(*order, len(lead)), (groups, -1, k))
     tables = np.reshape(table.transpose(*order, len(lead), len(lead) + 1)[
         (slice(None),) * len(varies) + (0,) * len(rest)], (groups, p, k))
-    out = np.matmul(rows, np.swapaxes(tables, -1, -2))  # (groups, rows, p)
+    out = _matmul_in_stacks(rows, np.swapaxes(tables, -1, -2))  # (groups, rows, p)
     out = out.reshape(*(lead[a] for a in order), p)
     return np.moveaxis(out, range(len(lead)), order)
+
+
+#: Rows per matrix product: small enough that OpenBLAS runs each on the calling thread.
+#: One large product runs on its thread pool, which serialises the calls of two threads
+#: (a 2-thread study ran at 0.55 of two single-threaded ones); non-BLAS einsum was 6x
+#: slower on one thread.
+STACK_ROWS = 32
+
+
+def _matmul_in_stacks(a, b):
+    """``a @ b`` for (groups, rows, k) by (groups, k, p), as products of STACK_ROWS rows."""
+    groups, rows, k = a.shape
+    whole = rows - rows % STACK_ROWS
+    out = np.empty((groups, rows, b.shape[-1]))
+    if whole:
+        stacked = np.reshape(a[:, :whole], (groups, whole // STACK_ROWS, STACK_ROWS, k))
+        out[:, :whole] = np.reshape(np.matmul(stacked, b[:, None]), (groups, whole, -1))
+    if whole < rows:
+        out[:, whole:] = np.matmul(a[:, whole:], b)
+    return out
 
 
 def _edge_tables(abscissa, ifov, cosine: bool):
