@@ -1,8 +1,9 @@
-"""Tests of xbsm.atmosphere.modtran: MODTRAN tape7 files read into database tables, and the
-MODTRAN 6 JSON cases of a grid.
+"""Tests of xbsm.atmosphere.modtran: MODTRAN tape7 and CSV files read into database tables,
+and the MODTRAN 6 JSON cases of a grid.
 
 The tape7 files under tests/data/modtran/ are MODTRAN runs from pyradi's repository
-(NelisW/pyradi, pyradi/data/, MIT licence; see NOTICE), unmodified.
+(NelisW/pyradi, pyradi/data/, MIT licence; see NOTICE), unmodified; the CSV file there is a
+MODTRAN 6 run from Free-Space-QKD-Lab-HWU/Qrackling (MIT licence; see NOTICE), unmodified.
 """
 
 from __future__ import annotations
@@ -359,3 +360,146 @@ def test_read_tape7_names_the_row_where_the_spectral_column_turns_back(tmp_path)
     with pytest.raises(ValueError, match=r"turn.tp7:21: the spectral column FREQ is not strictly "
                                          r"monotone \(2058.0 then 2000.0\)"):
         atm.read_tape7(bad)
+
+
+# ---- MODTRAN 6 CSV output (CSVPRNT) ---------------------------------------------------
+# tests/data/modtran/Transm_100km_obs_zen_0deg_scan.csv: a MODTRAN 6 CSVPRNT scanned output
+# (a transmittance run, 300-2000 nm by 1 nm, 38 columns after the wavelength) from
+# Free-Space-QKD-Lab-HWU/Qrackling (MIT licence; see NOTICE), unmodified.
+
+CSV = DATA / "Transm_100km_obs_zen_0deg_scan.csv"
+#: The two header lines of a radiance-run CSVPRNT block as a public file prints them
+#: (brandon-reade/Qrackling, +modtran/Data/Goldstone/.../000013__Rad_..._scan.csv, commit
+#: eef4dc3): the column names only; the rows of the fixture below are made up.
+RADIANCE_HEADER = (
+    "Waveln,  combin,  path,  path thermal,  surface,  path multiple,  sing,  grnd,  drct,  "
+    "total,  irrad,  irrad,  - nat log,  direct,  ToA,  bbody\n"
+    "  [nm],  path trans,  emission,   scat,   emission,   scat,  scat,  rflt,  rflt,   rad,"
+    "   ref,  @obs,  path trans,  emiss,  irrad,  temp[K]\n")
+
+
+def _radiance_csv(path, rows, los="los index, 0\n"):
+    """A radiance block under the public header: rows of (nm, trans, emission, thermal scat,
+    surface emission, multiple scat, single scat, grnd rflt, drct rflt); total rad is their
+    sum (the rule the public rows follow), the other seven columns are filler."""
+    text = f"case index 0 = {{\n{los}num freq, {len(rows)}\nnum column, 15\n" + RADIANCE_HEADER
+    for nm, trans, em, tsc, surf, mult, sing, grnd, drct in rows:
+        terms = (em, tsc, surf, mult, sing, grnd)
+        total = "-nan(ind)" if "-nan(ind)" in terms else sum(terms)  # as MODTRAN prints it
+        text += (f"{nm}, {trans}, {em}, {tsc}, {surf}, {mult}, {sing}, {grnd}, {drct}, "
+                 f"{total}, 0, 0, 0.5, 0.97, 1e-08, 210.0\n")
+    path.write_text(text + "}\n")
+    return path
+
+
+def test_read_modtran_csv_reproduces_the_public_files_numbers():
+    # independent of the reader: the file split on commas; rows 6-1706 are 1701 rows of
+    # 39 numbers (wavelength in nm, then 'combin trans' and 37 more transmittances)
+    lines = CSV.read_text().splitlines()
+    assert lines[:3] == ["case index 1 = {", "num freq, 1701", "num column, 38"]
+    assert lines[-1] == "}"
+    table = np.array([[float(t) for t in line.split(",")] for line in lines[5:-1]])
+    assert table.shape == (1701, 39)
+    (run,) = atm.read_modtran_csv(CSV)
+    assert list(run.data_vars) == ["TRANS"]  # a transmittance run: no radiance columns
+    np.testing.assert_array_equal(run.TRANS.values, table[:, 1])
+    np.testing.assert_array_equal(run.wavelength.values, table[:, 0] * 1e-9)
+    assert (run.TRANS.values[0], run.TRANS.values[-1]) == (0.0129122, 0.326133)
+    assert run.TRANS.attrs["modtran_column"] == "combin trans"
+    assert run.TRANS.attrs["units"] == "1" and run.wavelength.attrs["units"] == "m"
+    a = run.attrs
+    assert (a["modtran_format"], a["modtran_case_index"], a["modtran_first_line"]) == (
+        "CSVPRNT", 1, 1)
+    assert "modtran_los_index" not in a  # this MODTRAN 6 build prints no 'los index' line
+    assert a["modtran_spectral_column"] == "Waveln [nm]"
+    assert a["modtran_columns"].split()[:3] == ["Waveln_[nm]", "combin_trans", "H2O_trans"]
+
+
+def test_read_modtran_csv_reads_every_block_of_a_file(tmp_path):
+    # a CSVPRNT file shared by several cases holds one block per case: the public block
+    # twice, the second renumbered
+    lines = CSV.read_text().splitlines()
+    path = tmp_path / "two.csv"
+    path.write_text("\n".join(lines + ["case index 2 = {"] + lines[1:]) + "\n")
+    runs = atm.read_modtran_csv(path)
+    assert [r.attrs["modtran_case_index"] for r in runs] == [1, 2]
+    assert [r.attrs["modtran_first_line"] for r in runs] == [1, len(lines) + 1]
+    np.testing.assert_array_equal(runs[0].TRANS.values, runs[1].TRANS.values)
+
+
+def test_read_modtran_csv_radiance_block_sums_modtran6_terms_into_the_database_components(
+        tmp_path):
+    rows = [(400, 0.5, 1e-6, 2e-7, 3e-6, 0.04, 0.06, 0.02, 0.015),
+            (401, 0.6, 2e-6, 3e-7, 4e-6, "-nan(ind)", 0.07, 0.03, 0.02),
+            (402, 0.7, 3e-6, 4e-7, 5e-6, 0.05, 0.08, 0.04, 0.03)]
+    (run,) = atm.read_modtran_csv(_radiance_csv(tmp_path / "rad_scan.csv", rows))
+    assert list(run.data_vars) == ["TRANS", "PTH_THRML", "SURF_EMIS", "SOL_SCAT", "GRND_RFLT",
+                                   "TOTAL_RAD", "SING_SCAT", "DRCT_RFLT", "THRML_SCT"]
+    assert run.attrs["modtran_los_index"] == 0
+    np.testing.assert_array_equal(run.TRANS.values, [0.5, 0.6, 0.7])
+    # micro-W sr-1 cm-2 nm-1 -> W sr-1 cm-2 um-1: times 1e-3, as read_tape7 does a .7sc's
+    assert run.PTH_THRML.values[0] == pytest.approx((1e-6 + 2e-7) * 1e-3, rel=1e-15)
+    assert run.SOL_SCAT.values[0] == pytest.approx((0.04 + 0.06) * 1e-3, rel=1e-15)
+    assert run.GRND_RFLT.values[2] == pytest.approx(0.04e-3, rel=1e-15)
+    assert run.PTH_THRML.attrs["modtran_column"] == "path emission + path thermal scat"
+    assert run.SOL_SCAT.attrs["modtran_column"] == "path multiple scat + sing scat"
+    # the file's total is the sum of the four database radiances (NaN where a term is NaN)
+    parts = run.PTH_THRML + run.SURF_EMIS + run.SOL_SCAT + run.GRND_RFLT
+    np.testing.assert_allclose(parts.values[[0, 2]], run.TOTAL_RAD.values[[0, 2]], rtol=1e-12)
+    assert np.isnan(run.SOL_SCAT.values[1]) and np.isnan(run.TOTAL_RAD.values[1])
+    assert run.SING_SCAT.values[1] == pytest.approx(0.07e-3, rel=1e-15)
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (lambda lines: lines[:100], r"scan.csv:100: 'num freq, 1701' but the block starting at "
+                                r"line 1 has 95 rows \(truncated file\?\)"),
+    (lambda lines: lines[:-1], r"scan.csv:1706: expected '}' after the 1701 rows"),
+    (lambda lines: lines[:9] + [lines[9].replace("0.0506637", "x.xx", 1)] + lines[10:],
+     r"scan.csv:10: column combin trans holds 'x.xx', not a number"),
+    (lambda lines: lines[:9] + [lines[9] + ", 1"] + lines[10:],
+     r"scan.csv:10: row has 40 fields; the header has 39"),
+    (lambda lines: lines[:2] + ["num column, 37"] + lines[3:],
+     r"scan.csv:4: 'num column, 37' means 38 header fields"),
+    (lambda lines: [lines[0], lines[2]] + lines[3:],
+     r"scan.csv:3: the block starting at line 1 has no 'num freq, <N>' line before its "
+     r"column header; got 'Waveln,  combin"),
+    (lambda lines: ["case index 1 ="] + lines[1:], r"scan.csv:1: expected 'case index <N> = {'"),
+    (lambda lines: lines[:3] + [lines[3].replace("Waveln", "Freq", 1),
+                                lines[4].replace("[nm]", "[cm-1]", 1)] + lines[5:],
+     r"scan.csv:4: spectral column 'Freq \[cm-1\]' is not \['Waveln \[nm\]'\]"),
+    (lambda lines: lines[:20] + [lines[20].replace("315, ", "300, ", 1)] + lines[21:],
+     r"scan.csv:21: the spectral column Waveln \[nm\] is not strictly monotone "
+     r"\(314.0 then 300.0\)"),
+    (lambda lines: [], r"scan.csv:1: no 'case index <N> = {' block in the file"),
+])
+def test_read_modtran_csv_names_the_file_and_line_of_a_malformed_file(edit, message, tmp_path):
+    lines = CSV.read_text().splitlines()
+    bad = tmp_path / "scan.csv"
+    bad.write_text("\n".join(edit(lines)) + "\n")
+    with pytest.raises(ValueError, match=message) as info:
+        atm.read_modtran_csv(bad)
+    assert "\n" not in str(info.value)  # one line
+
+
+def test_tables_from_runs_takes_csv_runs_placed_by_hand(tmp_path):
+    (run,) = atm.read_modtran_csv(CSV)
+    with pytest.raises(ValueError, match=r"scan.csv:1: the run has no card echo \(a MODTRAN "
+                                         r"CSV output holds none\); pass visibility="):
+        atm.tables_from_runs([run])
+    with pytest.raises(ValueError, match=r"scan.csv:1: component PTH_THRML is not a column"):
+        atm.tables_from_runs([run], visibility=[23.0], altitude=[1000.0], ground_range=[0.0])
+    # the transmittance run with zero radiances, one table; then written and read back
+    table = atm.tables_from_runs([run], visibility=[23.0], altitude=[1000.0],
+                                 ground_range=[0.0], blank_as_zero=True,
+                                 attrs={"surface_reflectance_of_database": 0.15})
+    assert "xbsm.atmosphere.read_modtran_csv: Transm_100km" in table.attrs["source"]
+    path = atm.write_database(atm.from_tables(table), tmp_path / "csv.nc")
+    with atm.use_database(path):
+        out = atm.atmosphere_at(1000.0, 0.0, 23.0, interpolation="exact")
+    np.testing.assert_array_equal(out.transmission.values, run.TRANS.values.astype(np.float32))
+    # a radiance block: every component from the file, in the file's units
+    rows = [(400 + k, 0.5, 1e-6, 2e-7, 3e-6, 0.04, 0.06, 0.02, 0.015) for k in range(3)]
+    (rad,) = atm.read_modtran_csv(_radiance_csv(tmp_path / "rad_scan.csv", rows, los=""))
+    cube = atm.tables_from_runs([rad], visibility=[23.0], altitude=[1000.0], ground_range=[0.0])
+    assert "modtran_los_index" not in rad.attrs
+    np.testing.assert_array_equal(cube.values[0, 0, 0, 3], rad.SOL_SCAT.values)

@@ -107,7 +107,8 @@ _PUBLIC = {
         "band_atmosphere_arrays", "band_wavelengths", "interpolate_database",
         "across_visibility", "condition_inputs")},
     **{name: "modtran" for name in (
-        "APPENDIX_A", "MODTRAN6_KEYS", "modtran_inputs", "read_tape7", "tables_from_runs")},
+        "APPENDIX_A", "MODTRAN6_KEYS", "modtran_inputs", "read_modtran_csv", "read_tape7",
+        "tables_from_runs")},
     **{name: "tables" for name in (
         "DIMS", "FILE_UNITS", "REQUIRED_ATTRS", "from_tables", "horizon", "validate_database",
         "write_database")},

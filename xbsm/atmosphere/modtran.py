@@ -1,10 +1,12 @@
-"""MODTRAN's own files in and out: read tape7 / ``.7sc`` outputs, write MODTRAN 6 JSON inputs.
+"""MODTRAN's own files in and out: read tape7, ``.7sc`` and CSV outputs, write JSON inputs.
 
 :func:`read_tape7` reads a MODTRAN text spectral output, the ``tape7`` (``.tp7``) or the
 scanned (slit-convolved) ``.7sc``, one :class:`xarray.Dataset` per run on a ``wavelength``
 dimension in metres, the database components under the database's names and in the
 database file's units (:data:`~xbsm.atmosphere.tables.FILE_UNITS`), and the run's card echo
 (model, aerosol, visibility, geometry, spectral settings) as ``modtran_*`` attributes.
+:func:`read_modtran_csv` reads MODTRAN 6's CSV spectral output (``FILEOPTIONS.CSVPRNT``) into
+runs of the same shape (a CSV has no card echo: the run's place is given by hand).
 :func:`tables_from_runs` places runs on the (visibility, altitude, ground range) grid as the
 DataArray :func:`~xbsm.atmosphere.tables.from_tables` takes.
 :func:`modtran_inputs` writes the MODTRAN 6 JSON cases that would compute a cube on a grid,
@@ -32,10 +34,27 @@ Where each format fact comes from (nothing here is guessed from the outputs alon
   MODTRAN's card order, checked on the sample tape7 files of pyradi (NelisW/pyradi,
   ``pyradi/data/tape7-*``; e.g. the MODTRAN 6 echo of the JSON case above gives IHAZE 1,
   VIS 23, GNDALT 0.315, H1 21, IDAY 121 where its JSON says AER_RURAL, 23.0, 0.315, 21.0,
-  121).
+  121);
+- the MODTRAN 6 CSV layout (``case index <N> = {``, ``los index``, ``num freq``, ``num
+  column``, two header lines, the rows, ``}``), its column names and its units: public
+  CSVPRNT files. Free-Space-QKD-Lab-HWU/Qrackling (MIT) holds transmittance runs
+  (``Examples/Data/atmospheric transmittance/varying elevation MODTRAN data 2/*_scan.csv``;
+  one is ``tests/data/modtran/Transm_100km_obs_zen_0deg_scan.csv``, unmodified); its fork
+  brandon-reade/Qrackling holds radiance runs (``+modtran/Data/**/*_scan.csv``, with the
+  JSON cases that made them: XFLAG N, so micro-W sr-1 cm-2 nm-1 as in a ``.7sc``). Their
+  rows add up to ``total rad`` as path emission + path thermal scat + surface emission +
+  path multiple scat + sing scat + grnd rflt (e.g. 0.129464 + 0.000674186 = 0.130138 at
+  10000 nm by night; by day at 400 nm, path multiple scat 0 and sing scat 0.0601953 =
+  total rad), so MODTRAN 6 prints the thermal scatter and the single scatter as terms of
+  their own, where MODTRAN 5's PTH_THRML and SOL_SCAT hold them: the CSV reader sums them
+  into PTH_THRML and SOL_SCAT. No radiance CSV with a licence that allows a copy was
+  found: the radiance branch is tested on made-up rows under the public header. The same
+  rule probably holds for a MODTRAN 6 ``.tp7`` (pymod6's tests find its binary tape7, SLI
+  and JSON outputs equal column for column), where :func:`read_tape7` takes ``THRML_EM``
+  and ``MULT_SCAT`` alone (read from a header without rows): open, see the docs.
 
-MODTRAN 6's CSV and JSON spectral outputs are not read: no public sample of either was
-found to test a reader against (``docs/atmosphere.md``, "Bring your own MODTRAN tables").
+MODTRAN 6's JSON spectral output (``JSONPRNT``) is not read: no public sample was found
+(``docs/atmosphere.md``, "Bring your own MODTRAN tables").
 """
 
 from __future__ import annotations
@@ -57,6 +76,7 @@ __all__ = [
     "APPENDIX_A",
     "MODTRAN6_KEYS",
     "modtran_inputs",
+    "read_modtran_csv",
     "read_tape7",
     "tables_from_runs",
 ]
@@ -375,12 +395,209 @@ def read_tape7(path) -> list[xr.Dataset]:
     return runs
 
 
+# ---------------------------------------------------------------------------------------
+# MODTRAN 6 CSV output (FILEOPTIONS.CSVPRNT)
+# ---------------------------------------------------------------------------------------
+
+_CSV_CASE = re.compile(r"^case index\s+(\d+)\s*=\s*\{$")
+_CSV_COUNT = re.compile(r"^(los index|num freq|num column)\s*,\s*(\d+)$")
+#: A CSV field MODTRAN prints for a NaN or an infinity: the C runtime's text, e.g. the
+#: ``-nan(ind)`` of a Windows build (seen in public CSVPRNT files).
+_CSV_NONFINITE = re.compile(r"^([-+]?)(nan|inf|infinity)(\(\w*\))?$", re.IGNORECASE)
+#: Spectral column of a CSVPRNT block -> its unit. Only the scanned file's nanometre grid
+#: (``<CSVPRNT>_scan.csv`` of a run with XFLAG N) has been seen in a public file.
+_CSV_SPECTRAL = {"Waveln [nm]": "nm"}
+#: Database component -> the CSV columns summed into it. Transmittance runs (IEMSCT 0):
+#: ``combin trans``. Radiance runs: MODTRAN 6 prints the thermal scatter and the single
+#: scatter as their own terms of ``total rad`` (total = path emission + path thermal scat +
+#: surface emission + path multiple scat + sing scat + grnd rflt in the public rows), where
+#: MODTRAN 5's PTH_THRML and SOL_SCAT already hold them.
+_CSV_COLUMNS = {
+    "TRANS": (("combin trans",), ("combin path trans",)),
+    "PTH_THRML": (("path emission", "path thermal scat"),),
+    "SURF_EMIS": (("surface emission",),),
+    "SOL_SCAT": (("path multiple scat", "sing scat"),),
+    "GRND_RFLT": (("grnd rflt",),),
+}
+#: Other radiance columns kept (for checks), under the tape7 names.
+_CSV_EXTRA = {"TOTAL_RAD": "total rad", "SING_SCAT": "sing scat", "DRCT_RFLT": "drct rflt",
+              "THRML_SCT": "path thermal scat"}
+
+
+def _csv_number(token, name, path, lineno):
+    text = token.strip()
+    match = _CSV_NONFINITE.match(text)
+    if match:
+        value = math.inf if match.group(2).lower().startswith("inf") else math.nan
+        return -value if match.group(1) == "-" else value
+    try:
+        return float(text)
+    except ValueError:
+        _fail(path, lineno, f"column {name} holds {text!r}, not a number")
+
+
+def _csv_block(lines, start, path):
+    """One ``case index N = {`` ... ``}`` block from line index ``start``: (Dataset, next)."""
+    head = _CSV_CASE.match(lines[start].strip())
+    if head is None:
+        _fail(path, start + 1, "expected 'case index <N> = {' (the start of a CSVPRNT block); "
+                               f"got {lines[start].strip()!r}")
+    counts, i = {}, start + 1
+    while i < len(lines) and (m := _CSV_COUNT.match(lines[i].strip())):
+        counts[m.group(1)] = int(m.group(2))
+        i += 1
+    for key in ("num freq", "num column"):
+        if key in counts:
+            continue
+        if i >= len(lines):
+            _fail(path, len(lines), f"the block starting at line {start + 1} ends before its "
+                                    f"'{key}, <N>' line (truncated file?)")
+        _fail(path, i + 1, f"the block starting at line {start + 1} has no '{key}, <N>' line "
+                           f"before its column header; got {lines[i].strip()[:60]!r}")
+    ncol = counts["num column"] + 1  # the count leaves out the spectral column
+    if i + 2 > len(lines):
+        _fail(path, len(lines), f"the block starting at line {start + 1} ends before its "
+                                "two column-header lines (truncated file?)")
+    top, bottom = lines[i].split(","), lines[i + 1].split(",")
+    if len(top) != ncol or len(bottom) != ncol:
+        _fail(path, i + 1, f"'num column, {ncol - 1}' means {ncol} header fields (with the "
+                           f"spectral column) on two lines; found {len(top)} and "
+                           f"{len(bottom)}")
+    names = [" ".join(f"{a} {b}".split()) for a, b in zip(top, bottom, strict=True)]
+    if names[0] not in _CSV_SPECTRAL:
+        _fail(path, i + 1, f"spectral column {names[0]!r} is not {sorted(_CSV_SPECTRAL)} (the "
+                           "only one seen in a public CSVPRNT file: the _scan.csv of a run "
+                           "with XFLAG N); read the run's .tp7 or .7sc instead")
+    nfreq, rows, first_row = counts["num freq"], [], i + 2
+    for k in range(first_row, first_row + nfreq):
+        if k >= len(lines) or lines[k].strip() == "}":
+            _fail(path, min(k, len(lines) - 1) + 1,
+                  f"'num freq, {nfreq}' but the block starting at line {start + 1} has "
+                  f"{len(rows)} rows (truncated file?)")
+        fields = lines[k].split(",")
+        if len(fields) == ncol + 1 and not fields[-1].strip():
+            fields = fields[:-1]  # a trailing comma
+        if len(fields) != ncol:
+            _fail(path, k + 1, f"row has {len(fields)} fields; the header has {ncol}")
+        rows.append([_csv_number(t, n, path, k + 1) for t, n in zip(fields, names,
+                                                                     strict=True)])
+    end = first_row + nfreq
+    if end >= len(lines) or lines[end].strip() != "}":
+        got = repr(lines[end].strip()) if end < len(lines) else "the end of the file"
+        _fail(path, min(end, len(lines) - 1) + 1,
+              f"expected '}}' after the {nfreq} rows ('num freq') of the block starting at "
+              f"line {start + 1}; got {got}")
+    if nfreq < 2:
+        _fail(path, first_row + 1, f"a run needs at least two spectral rows; found {nfreq}")
+    table = np.array(rows, dtype=np.float64)
+    grid = table[:, 0]
+    if not np.isfinite(grid).all():
+        k = int(np.flatnonzero(~np.isfinite(grid))[0])
+        _fail(path, first_row + k + 1, f"the spectral column {names[0]} is not finite")
+    step = np.sign(np.diff(grid))
+    if step[0] == 0 or np.any(step != step[0]):
+        k = int(np.flatnonzero(step != step[0])[0]) + 1 if step[0] != 0 else 1
+        _fail(path, first_row + k + 1, f"the spectral column {names[0]} is not strictly "
+                                       f"monotone ({float(grid[k - 1])!r} then "
+                                       f"{float(grid[k])!r})")
+    return _csv_dataset(table, names, head, counts, path, start, i), end + 1
+
+
+def _csv_dataset(table, names, head, counts, path, start, header):
+    """The database components of one CSVPRNT block, in the file's units, as a Dataset."""
+    picked, sources = {}, {}
+    for component, alternatives in _CSV_COLUMNS.items():
+        for columns in alternatives:
+            if all(c in names for c in columns):
+                values = sum(table[:, names.index(c)] for c in columns)
+                picked[component] = (values, component != "TRANS")
+                sources[component] = " + ".join(columns)
+                break
+    if "TRANS" not in picked:
+        _fail(path, header + 1, "no total transmittance column ('combin trans' or 'combin "
+                                f"path trans') among {', '.join(names)}")
+    for name, column in _CSV_EXTRA.items():
+        if column in names:
+            picked[name] = (table[:, names.index(column)], True)
+            sources[name] = column
+    unit = _CSV_SPECTRAL[names[0]]
+    wavelength, values = _to_file_units(unit, table[:, 0], picked)
+    data_vars = {}
+    for name, array in values.items():
+        units = "1" if name == "TRANS" else FILE_UNITS[1]
+        data_vars[name] = ("wavelength", array, {
+            "units": units, "modtran_column": sources[name],
+            "long_name": f"MODTRAN CSV column {sources[name]}" + (
+                "" if units == "1" else f", converted from the file's {unit} grid")})
+    attrs = {"modtran_format": "CSVPRNT", "modtran_case_index": int(head.group(1))}
+    if "los index" in counts:
+        attrs["modtran_los_index"] = counts["los index"]
+    attrs.update(modtran_file=str(path), modtran_first_line=start + 1,
+                 modtran_spectral_column=names[0], modtran_spectral_unit=unit,
+                 modtran_columns=" ".join(n.replace(" ", "_") for n in names))
+    return xr.Dataset(data_vars, coords={"wavelength": ("wavelength", wavelength, {
+        "units": "m", "long_name": "wavelength", "standard_name": "radiation_wavelength"})},
+        attrs=attrs)
+
+
+def read_modtran_csv(path) -> list[xr.Dataset]:
+    """Every block of a MODTRAN 6 CSV spectral output (``FILEOPTIONS.CSVPRNT``).
+
+    The layout, as public CSVPRNT files show it: per case (and line of sight) a block
+    ``case index <N> = {``, optionally ``los index, <K>``, ``num freq, <rows>``,
+    ``num column, <columns after the spectral one>``, two header lines whose fields join
+    into the column names (``Waveln`` over ``[nm]``, ``combin`` over ``trans``), the rows,
+    and ``}``. A NaN printed by the C runtime (``-nan(ind)``) reads as NaN.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``<CSVPRNT>_scan.csv`` on a nanometre grid (XFLAG N): the only spectral column
+        seen in a public file, ``Waveln [nm]``. Another spectral column is refused.
+
+    Returns
+    -------
+    list of xr.Dataset
+        One per block, on ``wavelength`` [m] ascending, in the shape :func:`read_tape7`
+        returns: ``TRANS`` [1] (``combin trans`` of a transmittance run, ``combin path
+        trans`` of a radiance run); for a radiance run also, where the block holds their
+        columns, PTH_THRML (``path emission`` + ``path thermal scat``), SURF_EMIS
+        (``surface emission``), SOL_SCAT (``path multiple scat`` + ``sing scat``),
+        GRND_RFLT (``grnd rflt``) and TOTAL_RAD, SING_SCAT, DRCT_RFLT, THRML_SCT, radiances
+        in W sr-1 cm-2 um-1 (the file's micro-W sr-1 cm-2 nm-1 times 1e-3). Attributes:
+        ``modtran_format`` (``"CSVPRNT"``), ``modtran_case_index``, ``modtran_los_index``
+        (when printed), ``modtran_file``, ``modtran_first_line``. A CSV holds no card
+        echo: :func:`tables_from_runs` needs ``visibility=``, ``altitude=`` and
+        ``ground_range=`` for these runs.
+
+    Raises
+    ------
+    ValueError
+        A malformed file, naming the file and the line (``path:line: what``).
+    """
+    path = Path(path)
+    lines = path.read_text(errors="replace").splitlines()
+    runs, i = [], 0
+    while i < len(lines):
+        if not lines[i].strip():
+            i += 1
+            continue
+        run, i = _csv_block(lines, i, path)
+        runs.append(run)
+    if not runs:
+        raise _FileError(f"{path}:1: no 'case index <N> = {{' block in the file")
+    return runs
+
+
 def _where(run):
     return f"{run.attrs['modtran_file']}:{run.attrs['modtran_first_line']}"
 
 
 def _run_visibility(run):
     """Visibility of a run [km]: VIS, or IHAZE's default when VIS is 0."""
+    if "modtran_VIS" not in run.attrs:
+        raise ValueError(f"{_where(run)}: the run has no card echo (a MODTRAN CSV output "
+                         "holds none); pass visibility=, altitude= and ground_range=")
     vis = float(run.attrs["modtran_VIS"])
     if vis <= 0:
         ihaze = int(run.attrs["modtran_IHAZE"])
@@ -394,6 +611,9 @@ def _run_visibility(run):
 def _run_geometry(run):
     """(altitude [m], ground range [m]) of a run: a sensor at H1 above a target on the ground."""
     a = run.attrs
+    if "modtran_H1" not in a:
+        raise ValueError(f"{_where(run)}: the run has no card echo (a MODTRAN CSV output "
+                         "holds none); pass altitude= and ground_range=")
     ground, h1, h2 = float(a["modtran_GNDALT"]), float(a["modtran_H1"]), float(a["modtran_H2"])
     if not (math.isclose(h2, ground, abs_tol=1e-5) and h1 > h2):
         raise ValueError(
@@ -405,17 +625,18 @@ def _run_geometry(run):
 
 def tables_from_runs(runs, *, visibility=None, altitude=None, ground_range=None,
                      wavelength=None, blank_as_zero=False, attrs=None) -> xr.DataArray:
-    """Runs of :func:`read_tape7` as the DataArray :func:`~xbsm.atmosphere.from_tables` takes.
+    """Runs of the MODTRAN readers as the DataArray :func:`~xbsm.atmosphere.from_tables` takes.
 
     Each run is one table: its (visibility, altitude, ground range) cell is read from its
     card echo (VIS, or IHAZE's default when VIS is 0; altitude H1 - GNDALT for a target on
     the ground, H2 = GNDALT; ground range BETA x :data:`xbsm.constants.EARTH_RADIUS`) or
-    given. The grid is every distinct coordinate; cells without a run are NaN.
+    given (a CSV run has no card echo: give all three). The grid is every distinct
+    coordinate; cells without a run are NaN.
 
     Parameters
     ----------
     runs : sequence of xr.Dataset
-        From :func:`read_tape7` (of one or several files).
+        From :func:`read_tape7` or :func:`read_modtran_csv` (of one or several files).
     visibility, altitude, ground_range : sequence of float, optional
         The coordinate of each run, overriding the card echo. [km], [m], [m]
     wavelength : sequence of float, optional
@@ -502,8 +723,11 @@ def tables_from_runs(runs, *, visibility=None, altitude=None, ground_range=None,
               if k.startswith("modtran_") and k not in ("modtran_file", "modtran_first_line")
               and all(r.attrs.get(k) == v for r in runs)}
     files = sorted({str(r.attrs["modtran_file"]) for r in runs})
+    readers = sorted({"read_modtran_csv" if r.attrs.get("modtran_format") == "CSVPRNT"
+                      else "read_tape7" for r in runs}, reverse=True)  # read_tape7 first
     out_attrs = {"title": f"MODTRAN tables from {len(runs)} run(s)",
-                 "source": "MODTRAN text outputs read by xbsm.atmosphere.read_tape7: "
+                 "source": "MODTRAN text outputs read by "
+                           + ", ".join(f"xbsm.atmosphere.{f}" for f in readers) + ": "
                            + ", ".join(Path(f).name for f in files)}
     surref = {r.attrs.get("modtran_SURREF") for r in runs}
     if len(surref) == 1:
