@@ -361,3 +361,32 @@ def test_flux_equivalent_of_a_published_netd():
     flux = math.pi * band_derivative(7.5e-6, 13.5e-6) * 0.05
     assert flux == pytest.approx(0.1386, abs=5e-4)
     assert flux < 0.14
+
+
+def test_f_number_rule_of_a_published_netd():
+    # Same FLIR support-centre page ("What is the sensitivity of Tau cameras in Watts per
+    # m^2?", a <50 mK NEdT at f/1.0 over 7.5-13.5 um, ~300 K): "Any f/# can be calculated by
+    # multiplying the result by (desired f/#)^2" -- the noise-equivalent flux, so the NETD
+    # of a detector-noise-limited (uncooled) camera, grows as F^2. xbsm's detector noise
+    # does not depend on the f-number, and its signal goes with the exact solid angle
+    # pi / (1 + 4 F^2): with read noise dominating (shot noise 0.5 % of it, in quadrature
+    # 1.4e-5), NETD(F) / NETD(1) = (1 + 4 F^2) / 5 within 2e-5 (measured 1.4e-5). FLIR's
+    # rule is the paraxial pi / (4 F^2): converted to it, xbsm gives F^2 within 2e-5;
+    # as computed, xbsm's ratio is 10 % (f/1.4), 15 % (f/2) and 19 % (f/4) below F^2.
+    camera = dict(focal_length=0.05, pixel_pitch_x=17e-6, wavelength_min=7.5e-6,
+                  wavelength_max=13.5e-6, quantum_efficiency=0.6, optics_transmission=0.9,
+                  integration_time=1e-4, read_noise=1e6, max_well=1e12, bit_depth=30.0,
+                  dark_current=0.0, cold_shield_temperature=1.0, cold_filter_temperature=1.0)
+    lab = xbsm.scenario(**LAB)
+
+    def netd(f_number):
+        sensor = xbsm.sensor(aperture_diameter=camera["focal_length"] / f_number, **camera)
+        return float(xbsm.netd(sensor, lab).netd)
+
+    reference = netd(1.0)
+    for f_number, below in ((1.4, 0.098), (2.0, 0.15), (4.0, 0.19)):
+        ratio = netd(f_number) / reference
+        assert ratio == pytest.approx((1 + 4 * f_number**2) / 5, rel=2e-5)
+        paraxial = ratio * (4 * f_number**2 / (1 + 4 * f_number**2)) / (4 / 5)
+        assert paraxial == pytest.approx(f_number**2, rel=2e-5)  # FLIR's (f/#)^2
+        assert 1 - ratio / f_number**2 == pytest.approx(below, abs=0.005)
