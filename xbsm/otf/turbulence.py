@@ -613,28 +613,40 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
     r0 = _scale_kernel(r0_ref, wl, reference)
     exponent = -3.44 * (wl / r0) ** (5.0 / 3.0)
     short_share = np.exp(-speed * exposure / r0)
-    w_short, w_long = w * short_share, w * (1.0 - short_share)
+    # the weights of the short- and the long-exposure sums, stacked on a new axis after the
+    # wavelength so that one multiply-add per wavelength makes both sums
+    shares = np.stack(np.broadcast_arrays(w * short_share, w * (1.0 - short_share)), axis=1)
     total = np.transpose(total, order)
     for index in _blocks(total.shape, [varies[i] for i in order]):
-        radial_, r0_ref_, diameter_, reference_, exponent_, w_short_, w_long_ = (
-            a[(slice(None),) + tuple(i if n > 1 else slice(None)
-                                     for i, n in zip(index, a.shape[1:], strict=True))]
-            for a in (radial, r0_ref, diameter, reference, exponent, w_short, w_long))
+        radial_, r0_ref_, diameter_, reference_, exponent_ = (
+            _block_of(a, index) for a in (radial, r0_ref, diameter, reference, exponent))
+        shares_ = shares[(slice(None), slice(None)) + tuple(
+            i if n > 1 else slice(None) for i, n in zip(index, shares.shape[2:], strict=True))]
         # the frequency's power once per block, not once per wavelength and scenario
         radial_5_3 = radial_ ** (5.0 / 3.0)
         tilt = _tilt_exponent(radial_, r0_ref_, diameter_, reference_)
         block = total[index].shape
-        short_sum, long_sum = np.zeros(block), np.zeros(block)
-        step = max(1, _STEP // max(1, short_sum.size))
+        sums = np.zeros((2,) + block)  # short- and long-exposure parts, each over the band
+        step = max(1, _STEP // max(1, sums[0].size))
         for start in range(0, n_wavelength, step):
             # Eq. 3-3's short-exposure OTF: exp(long-exposure exponent + tilt exponent)
             short = exponent_[start:start + step] * radial_5_3 + tilt
             np.exp(short, out=short)
-            for k, one in enumerate(short, start):  # band order, whatever the step
-                short_sum += w_short_[k if w_short_.shape[0] > 1 else 0] * one
-                long_sum += w_long_[k if w_long_.shape[0] > 1 else 0] * one
-        total[index] = short_sum + np.exp(-tilt) * long_sum
+            terms = (shares_[start:start + step] if shares_.shape[0] > 1 else shares_) * (
+                short[:, None])
+            if start == 0:  # a sum over the first axis adds in its order: from 0, the same bits
+                np.add.reduce(terms, axis=0, out=sums)
+            else:
+                for one in terms:  # band order, whatever the step
+                    sums += one
+        total[index] = sums[0] + np.exp(-tilt) * sums[1]
     return np.ascontiguousarray(np.transpose(total, np.argsort(order))).reshape(shape)
+
+
+def _block_of(a, index):
+    """Entries ``index`` of ``a``'s axes after its first (wavelength) axis; size-1 axes whole."""
+    return a[(slice(None),) + tuple(i if n > 1 else slice(None)
+                                    for i, n in zip(index, a.shape[1:], strict=True))]
 
 
 def _tilt_exponent(radial, r0_ref, aperture_diameter, reference):
