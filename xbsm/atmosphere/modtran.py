@@ -338,13 +338,7 @@ def _run_dataset(table, names, conditions, path, start, header):
                                 f"{', '.join(names)}")
     unit = _SPECTRAL[spectral]
     wavelength, values = _to_file_units(unit, grid, picked)
-    data_vars = {}
-    for name, array in values.items():
-        units = "1" if name == "TRANS" else FILE_UNITS[1]
-        data_vars[name] = ("wavelength", array, {
-            "units": units, "modtran_column": sources[name],
-            "long_name": f"MODTRAN column {sources[name]}" + (
-                "" if units == "1" else f", converted from the file's {unit} grid")})
+    data_vars = _components(values, sources, unit, "MODTRAN column")
     attrs = {f"modtran_{k}": v for k, v in conditions.items()}
     attrs.update(modtran_file=str(path), modtran_first_line=start + 1,
                  modtran_spectral_column=names[0], modtran_spectral_unit=unit,
@@ -381,18 +375,7 @@ def read_tape7(path) -> list[xr.Dataset]:
     ValueError
         A malformed file, naming the file and the line (``path:line: what``).
     """
-    path = Path(path)
-    lines = path.read_text(errors="replace").splitlines()
-    runs, i = [], 0
-    while i < len(lines):
-        if not lines[i].strip():
-            i += 1
-            continue
-        run, i = _parse_run(lines, i, path)
-        runs.append(run)
-    if not runs:
-        raise _FileError(f"{path}:1: no MODTRAN run in the file")
-    return runs
+    return _read_runs(path, _parse_run, "no MODTRAN run in the file")
 
 
 # ---------------------------------------------------------------------------------------
@@ -522,13 +505,7 @@ def _csv_dataset(table, names, head, counts, path, start, header):
             sources[name] = column
     unit = _CSV_SPECTRAL[names[0]]
     wavelength, values = _to_file_units(unit, table[:, 0], picked)
-    data_vars = {}
-    for name, array in values.items():
-        units = "1" if name == "TRANS" else FILE_UNITS[1]
-        data_vars[name] = ("wavelength", array, {
-            "units": units, "modtran_column": sources[name],
-            "long_name": f"MODTRAN CSV column {sources[name]}" + (
-                "" if units == "1" else f", converted from the file's {unit} grid")})
+    data_vars = _components(values, sources, unit, "MODTRAN CSV column")
     attrs = {"modtran_format": "CSVPRNT", "modtran_case_index": int(head.group(1))}
     if "los index" in counts:
         attrs["modtran_los_index"] = counts["los index"]
@@ -575,6 +552,26 @@ def read_modtran_csv(path) -> list[xr.Dataset]:
     ValueError
         A malformed file, naming the file and the line (``path:line: what``).
     """
+    return _read_runs(path, _csv_block, "no 'case index <N> = {' block in the file")
+
+
+def _components(values, sources, unit, label):
+    """The runs' data variables: each component on ``wavelength`` with its units and column."""
+    out = {}
+    for name, array in values.items():
+        units = "1" if name == "TRANS" else FILE_UNITS[1]
+        out[name] = ("wavelength", array, {
+            "units": units, "modtran_column": sources[name],
+            "long_name": f"{label} {sources[name]}" + (
+                "" if units == "1" else f", converted from the file's {unit} grid")})
+    return out
+
+
+def _read_runs(path, parse, empty):
+    """Every run of a text file, read by ``parse(lines, i, path)`` -> (run, next line).
+
+    Blank lines between runs are skipped; ``empty`` is the error when there is no run.
+    """
     path = Path(path)
     lines = path.read_text(errors="replace").splitlines()
     runs, i = [], 0
@@ -582,10 +579,10 @@ def read_modtran_csv(path) -> list[xr.Dataset]:
         if not lines[i].strip():
             i += 1
             continue
-        run, i = _csv_block(lines, i, path)
+        run, i = parse(lines, i, path)
         runs.append(run)
     if not runs:
-        raise _FileError(f"{path}:1: no 'case index <N> = {{' block in the file")
+        raise _FileError(f"{path}:1: {empty}")
     return runs
 
 
