@@ -145,24 +145,67 @@ def circular_aperture_band_kernel(radial, aperture_diameter, wavelength, obscura
     0 x weight, which is 0 for finite weights. Other cases (a ratio per entry, weights
     with axes of their own in front) take the plain route.
     """
-    nu = radial / (aperture_diameter / wavelength)
+    radial = np.asarray(radial, dtype=float)
+    scale = np.asarray(aperture_diameter / wavelength, dtype=float)  # nu = radial / scale
     eta = np.asarray(obscuration_ratio, dtype=float)
     weights = np.asarray(weights)
-    nu = np.asarray(nu, dtype=float)
-    shape = np.broadcast_shapes(nu.shape[:-1], weights.shape[:-1]) if nu.ndim else ()
+    full = np.broadcast_shapes(radial.shape, scale.shape)
+    shape = np.broadcast_shapes(full[:-1], weights.shape[:-1]) if full else ()
     plain = (
-        nu.ndim < 2 or eta.size != 1 or eta.ndim > nu.ndim or weights.ndim > nu.ndim
-        or shape[0] != nu.shape[0] or not np.all(np.isfinite(weights)))
+        len(full) < 2 or 0 in full or eta.size != 1 or eta.ndim > len(full)
+        or weights.ndim > len(full) or shape[0] != full[0]
+        or not np.isfinite(weights).all())
     if plain:
         mono = circular_aperture_kernel(radial, aperture_diameter, wavelength, eta)
         return np.einsum("...k,...k->...", mono, weights)
-    rows, values = _inside_rows(nu, _one_ratio(eta))
+    extremes = _extremes_from_radial(radial, scale, full)
+    if extremes is None:
+        nu = radial / scale
+        low, high = _row_extremes(nu)
+        rows = _rows(~(low >= 1.0))
+        nu = nu[rows] if rows is not None else None
+    else:
+        low, high = extremes
+        rows = _rows(~(low >= 1.0))
+        nu = radial[rows] / scale if rows is not None else None  # only the rows inside
     out = np.zeros(shape)
     if rows is not None:
-        if weights.ndim == nu.ndim and weights.shape[0] != 1:
+        values = _on_rows(nu, _one_ratio(eta), low[rows], high[rows])
+        if weights.ndim == len(full) and weights.shape[0] != 1:
             weights = weights[rows]
         out[rows] = np.einsum("...k,...k->...", values, weights)
     return out
+
+
+def _extremes_from_radial(radial, scale, full):
+    """Each row's smallest and largest nu = radial / scale without dividing them all.
+
+    Where ``radial`` holds the rows (first axis) and is constant along the last
+    (wavelength) axis, and ``scale`` = D / lambda has no row axis, is finite and > 0,
+    and radial >= 0: the row's extremes are its radial values over the largest and the
+    smallest scale (a correctly rounded division is monotonic), the same numbers as
+    the extremes of the divided array. Else None (the caller divides everything).
+    """
+    if (radial.ndim != len(full) or radial.shape[0] != full[0] or radial.shape[-1] != 1
+            or not 1 <= scale.ndim < radial.ndim or not radial.min() >= 0.0
+            or not 0.0 < scale.min() <= scale.max() < np.inf):  # (False with a NaN)
+        return None
+    lows = radial / scale.max(axis=-1, keepdims=True)
+    highs = radial / scale.min(axis=-1, keepdims=True)
+    return _row_extremes(lows)[0], _row_extremes(highs)[1]
+
+
+def _row_extremes(nu):
+    """The smallest and largest value of each row (first axis), NaN where it holds a NaN.
+
+    Reduced along the first axis of the transposed copy: numpy reduces a short last
+    axis one row at a time (13 us for 195 rows of 5, 4 us this way, copy included).
+    """
+    flat = nu.reshape(nu.shape[0], -1)
+    if flat.shape[1] == 1:
+        return flat[:, 0], flat[:, 0]
+    columns = np.ascontiguousarray(flat.T)
+    return np.minimum.reduce(columns, axis=0), np.maximum.reduce(columns, axis=0)
 
 
 def _one_ratio(eta):
@@ -207,18 +250,21 @@ def _inside_rows(nu, eta):
     no value, as A >= +0. Few numpy calls, and none on one-value arrays: a block's
     fixed cost is a few microseconds per call.
     """
-    flat = nu.reshape(nu.shape[0], -1)
-    if flat.shape[1] == 0:
+    if nu.size == 0:
         return None, None
-    low = np.minimum.reduce(flat, axis=1)
+    low, high = _row_extremes(nu)
     rows = _rows(~(low >= 1.0))
     if rows is None:
         return None, None
-    nu, low = nu[rows], low[rows]
+    return rows, _on_rows(nu[rows], eta, low[rows], high[rows])
+
+
+def _on_rows(nu, eta, low, high):
+    """:func:`_inside_rows`'s values on rows ``nu`` with extremes ``low`` and ``high``."""
     nonnegative = bool(low.min() >= 0.0)  # then no clip at 0 (with a NaN: clipped)
     out = _diffraction_term(nu, nonnegative)
     if eta is None:
-        return rows, out
+        return out
     eta2 = eta * eta
     central = _rows(~(low >= eta))
     if central is not None:
@@ -226,7 +272,6 @@ def _inside_rows(nu, eta):
         inner *= eta2
         out[central] += inner
     lower, upper = (1.0 - eta) / 2.0, (1.0 + eta) / 2.0
-    high = np.maximum.reduce(nu.reshape(nu.shape[0], -1), axis=1)
     below_band = _rows(high < lower)  # no NaN there (high would be NaN)
     if below_band is not None:
         out[below_band] += -2.0 * eta2
@@ -239,7 +284,7 @@ def _inside_rows(nu, eta):
         overlap[band] = _annulus_transition(part[band], eta)
         out[band_rows] += overlap
     out /= 1.0 - eta2
-    return rows, out
+    return out
 
 
 def _annulus_transition(nu, eta):
