@@ -18,9 +18,10 @@ __all__ = ["circular_aperture", "defocused_aperture", "defocus_wavefront_coeffic
 def _diffraction_term(r, nonnegative=False):
     """(2/pi)(acos r - r sqrt(1 - r^2)) for 0 <= r <= 1, else 0 (a new array).
 
-    In place on two temporaries: the formula's own ufuncs on the same values, so the
-    same bits as writing it out, in a third of the passes over memory. ``nonnegative``:
-    the caller knows r >= 0 (or NaN), and the clip at 0 is skipped.
+    In place on two temporaries (not a new array per operation, each a pass through
+    memory of its own): the formula's own ufuncs on the same values, so the same bits
+    as writing it out. ``nonnegative``: the caller knows r >= 0, and the clip at 0 is
+    skipped.
     """
     # ufuncs: np.clip would compute dask
     rc = np.minimum(r, 1.0) if nonnegative else np.maximum(r, 0.0)
@@ -252,8 +253,9 @@ def _inside_rows(nu, eta):
     reaching into (1 - eta)/2 <= nu <= (1 + eta)/2 (within them, on the band's entries),
     -2 eta^2 on rows wholly below the band. Every value is the whole-array formula's to
     the bit: the same ufuncs on the same values, and adding an exact 0 (or not) changes
-    no value, as A >= +0. Few numpy calls, and none on one-value arrays: a block's
-    fixed cost is a few microseconds per call.
+    no value, as A >= +0. No numpy calls on one-value arrays: each call costs about a
+    microsecond whatever its size, and a (195 nodes, 5 scenarios) x 31 block makes about
+    a hundred.
     """
     if nu.size == 0:
         return None, None
