@@ -212,7 +212,8 @@ NOT_LABELLED = MappingProxyType({
     "xbsm.otf.spectral.is_lazy": "returns a bool",
     **{f"xbsm.otf.{name}": "a kernel: plain numpy arrays in and out, composed by "
        "xbsm.otf.system (labelled by the mechanism's public function)"
-       for name in ("aperture.circular_aperture_kernel", "detector.detector_kernel",
+       for name in ("aperture.circular_aperture_kernel",
+                    "aperture.circular_aperture_band_kernel", "detector.detector_kernel",
                     "aperture.hopkins_kernel", "defocus.annular_defocus_kernel",
                     "defocus.defocused_aperture_kernel",
                     "filters.dtft_filter_kernel", "filters.pybsm_filter_kernel",

@@ -249,3 +249,80 @@ def test_one_obscuration_ratio_equals_the_general_path_to_the_bit(eta):
     assert np.array_equal(one, general, equal_nan=True)
     assert np.array_equal(np.signbit(one), np.signbit(general))
     assert np.isnan(one.flat[15]) and np.all(one[radial >= CUTOFF] == 0.0)
+
+
+def _eq_3_20(nu, eta):
+    """IBSM Eq. 3-20 written out on whole arrays: every term everywhere, np.where, no gathers.
+
+    The formula as the docstring of ``circular_aperture`` gives it (A(x) clipped to [0, 1],
+    C with sin(phi) and tan(phi / 2) from cos(phi)), in the kernel's order of operations.
+    """
+    nu, eta = np.broadcast_arrays(nu, eta)
+
+    def term(x):
+        c = np.minimum(np.maximum(x, 0.0), 1.0)
+        return (2.0 / np.pi) * (np.arccos(c) - c * np.sqrt(1.0 - c**2))
+
+    with np.errstate(all="ignore"):
+        obscured = eta > 0
+        safe = np.where(obscured, eta, 0.5)
+        eta2 = eta**2
+        inner = np.where(obscured, eta2 * term(nu / safe), 0.0)
+        cos_phi = np.minimum(np.maximum((1.0 + eta2 - 4.0 * nu**2) / (2.0 * safe), -1.0), 1.0)
+        phi = np.arccos(cos_phi)
+        sin_phi = np.sqrt((1.0 - cos_phi) * (1.0 + cos_phi))
+        tan_half = np.sqrt((1.0 - cos_phi) / (1.0 + cos_phi))
+        annulus = (2.0 * safe * sin_phi / np.pi + (1.0 + eta2) * phi / np.pi - 2.0 * eta2
+                   - (2.0 * (1.0 - eta2) / np.pi)
+                   * np.arctan((1.0 + safe) / (1.0 - safe) * tan_half))
+        below = nu < (1.0 - eta) / 2.0
+        overlap = np.where(below, -2.0 * eta2, np.where(nu <= (1.0 + eta) / 2.0, annulus, 0.0))
+        out = (term(nu) + inner + np.where(obscured, overlap, 0.0)) / (1.0 - eta2)
+    return np.where(nu >= 1.0, 0.0, out)
+
+
+@pytest.mark.parametrize("order", ["random", "sorted"])
+@pytest.mark.parametrize("eta", [0.0, 0.4, "per scenario"])
+def test_kernels_equal_eq_3_20_written_out_to_the_bit(order, eta):
+    """The row-wise kernels (each term on the rows of nodes that need it, in place; the
+    polychromatic one summing row by row) give Eq. 3-20 written out on whole arrays to
+    the bit, and its weighted sum by the same contraction: unsorted and sorted nodes,
+    eta = 0, one eta, one per scenario; NaN, negative nu, nu >= 1 and the pieces'
+    boundaries included."""
+    from xbsm.otf.aperture import circular_aperture_band_kernel, circular_aperture_kernel
+
+    rng = np.random.default_rng(11)
+    scenarios, wavelengths = 4, 31
+    wl = np.linspace(0.45e-6, 0.55e-6, wavelengths)
+    wl[wavelengths // 2] = LAM
+    diameter = rng.uniform(0.09, 0.11, (scenarios, 1))
+    radial = rng.uniform(-0.02, 1.4, (60, scenarios, 1)) * CUTOFF
+    ratio = 0.4 if eta == "per scenario" else eta
+    edges = np.array([ratio, (1 - ratio) / 2, (1 + ratio) / 2, 1.0, 0.0])
+    radial[:15, 0, 0] = np.concatenate(
+        [edges, np.nextafter(edges, 2), np.nextafter(edges, -1)]) * diameter[0, 0] / LAM
+    radial[rng.integers(60, size=3), rng.integers(scenarios, size=3), 0] = np.nan
+    radial[50:, :, 0] = rng.uniform(1.5, 3.0, (10, scenarios)) * CUTOFF  # beyond the cutoff
+    if order == "sorted":  # the chain's nodes: ascending in each scenario, NaN last
+        radial = np.sort(radial, axis=0)
+    if eta == "per scenario":
+        eta = np.array([[0.0], [0.05], [0.4], [0.9]])  # (scenarios, 1): the general path
+    weights = rng.uniform(0.0, 1.0, (scenarios, wavelengths))
+    weights /= weights.sum(axis=-1, keepdims=True)
+
+    expected = _eq_3_20(radial / (diameter / wl), eta)
+    mono = circular_aperture_kernel(radial, diameter, wl, eta)
+    assert mono.shape == expected.shape
+    assert np.array_equal(mono, expected, equal_nan=True)
+    assert np.array_equal(np.signbit(mono), np.signbit(expected))
+    band = circular_aperture_band_kernel(radial, diameter, wl, eta, weights)
+    summed = np.einsum("...k,...k->...", expected, weights)
+    assert band.shape == summed.shape == (60, scenarios)
+    assert np.array_equal(band, summed, equal_nan=True)
+    assert np.array_equal(np.signbit(band), np.signbit(summed))
+    assert np.any(np.isnan(band)) and np.all(band[50:][~np.isnan(band[50:])] == 0.0)
+    # one node row at a time (a block of one row, and the rows' order reversed)
+    assert np.array_equal(circular_aperture_band_kernel(radial[::-1], diameter, wl, eta, weights),
+                          summed[::-1], equal_nan=True)
+    assert np.array_equal(circular_aperture_band_kernel(radial[7:8], diameter, wl, eta, weights),
+                          summed[7:8], equal_nan=True)

@@ -222,9 +222,10 @@ def _aperture_band_kernel(radial, aperture_diameter, obscuration_ratio, defocus_
             _last(np.hypot(radial, 0.0)), _last(aperture_diameter), wl,
             _last(obscuration_ratio), _last(defocus_opd), defocus_otf)
     else:
-        mono = aperture.circular_aperture_kernel(_last(np.hypot(radial, 0.0)),
-                                                  _last(aperture_diameter), wl,
-                                                  _last(obscuration_ratio))
+        # the weighted sum taken as it is evaluated (the same contraction, row by row)
+        return aperture.circular_aperture_band_kernel(_last(np.hypot(radial, 0.0)),
+                                                      _last(aperture_diameter), wl,
+                                                      _last(obscuration_ratio), w)
     return np.einsum("...k,...k->...", mono, w)
 
 
