@@ -192,6 +192,59 @@ def test_a_signal_inside_completing_that_fails_still_stops_the_run():
         interrupts.INTERRUPTED.clear()
 
 
+#: A run in a deferred section that gets SIGINT, and another SIGINT at every line its
+#: handler runs (after a function's first line: a lock taken there is held), capped at 4.
+_SIGNAL_DURING_THE_HANDLER = """
+import os, signal, sys
+from xbsm import interrupts
+
+signal.signal(signal.SIGINT, signal.default_int_handler)
+handler, sent, seen = interrupts._on_signal.__code__, [], set()
+
+def called_by_handler(frame):
+    while frame is not None:
+        if frame.f_code is handler:
+            return True
+        frame = frame.f_back
+    return False
+
+def another_signal(frame, event, arg):
+    if (event == "return" or (event == "line" and id(frame) in seen)) and len(sent) < 4:
+        sent.append(frame.f_code.co_name)
+        os.kill(os.getpid(), signal.SIGINT)
+    seen.add(id(frame))
+    return another_signal
+
+def tracer(frame, event, arg):
+    return another_signal if called_by_handler(frame.f_back) else None
+
+with interrupts.handling_signals():
+    try:
+        with interrupts.deferred():
+            sys.settrace(tracer)
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(1000):
+                pass
+            sys.settrace(None)
+    except interrupts.Interrupted:
+        sys.settrace(None)
+        print("stopped after", len(sent), "more signals")
+"""
+
+
+def test_a_signal_while_the_handler_runs_does_not_hang_the_run():
+    # a second Ctrl-C landing while the handler set threading.Event INTERRUPTED (which holds
+    # the Event's lock) ran the handler again in the same thread, which waited for that
+    # lock for ever; SIGTERM could not end it either (its handler waited too)
+    try:
+        done = subprocess.run([sys.executable, "-c", _SIGNAL_DURING_THE_HANDLER],
+                              capture_output=True, text=True, timeout=30)
+    except subprocess.TimeoutExpired:  # (killed by subprocess.run)
+        pytest.fail("a signal during the signal handler hung the process")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("stopped after") and "0 more" not in done.stdout
+
+
 def _as_in_a_terminal():
     # a background child of a non-interactive shell inherits SIGINT ignored (POSIX)
     signal.signal(signal.SIGINT, signal.SIG_DFL)

@@ -22,7 +22,34 @@ import contextlib
 import signal
 import threading
 
-INTERRUPTED = threading.Event()
+
+class _Flag:
+    """:class:`threading.Event`'s ``is_set``, ``set`` and ``clear``, without its lock.
+
+    The signal handler sets the flag, and Python runs a handler again, in the same
+    thread, when another signal arrives while it runs: ``Event.set`` holds the
+    Event's lock while it notifies waiters, so a second Ctrl-C (or a SIGTERM) landing
+    there made the handler wait for a lock its own thread held, for ever (and every
+    later signal's handler with it). Setting one attribute needs no lock: the threads
+    computing chunks only read it.
+    """
+
+    __slots__ = ("_set",)
+
+    def __init__(self):
+        self._set = False
+
+    def is_set(self) -> bool:
+        return self._set
+
+    def set(self) -> None:
+        self._set = True
+
+    def clear(self) -> None:
+        self._set = False
+
+
+INTERRUPTED = _Flag()
 """Set when SIGINT or SIGTERM arrived during a run (checked between writes)."""
 
 _state = {"deferred": 0, "signal": None, "depth": 0, "complete": False}
