@@ -67,6 +67,26 @@ def test_a_written_result_exits_0_even_when_its_figures_cannot_be_drawn(tmp_path
     assert sorted(p.name for p in figures.glob("*.png"))
 
 
+def test_a_run_interrupted_while_drawing_its_figures_does_not_ask_to_resume(tmp_path, capsys,
+                                                                            monkeypatch):
+    # the result is complete when the figures are drawn: the same command would be refused
+    # (the file exists), so the only advice is xbsm plot
+    def interrupted(result_file, directory):
+        raise interrupts.Interrupted()
+
+    monkeypatch.setattr(cli, "draw", interrupted)
+    study = _study(tmp_path, FORTY_ALTITUDES)
+    out = tmp_path / "out.nc"
+    with pytest.raises(SystemExit) as code:
+        cli.main(["run", str(study), "-o", str(out)])
+    assert code.value.code == 130
+    err = capsys.readouterr().err
+    assert "is complete; the figures were interrupted" in err and "xbsm plot" in err
+    assert "resume" not in err
+    with xr.open_dataset(out) as ds:
+        assert ds.niirs.sizes["altitude"] == 40
+
+
 def test_plot_sel_names_the_dimensions_on_a_wrong_one(tmp_path, capsys):
     study = _study(tmp_path, FORTY_ALTITUDES)
     out = tmp_path / "out.nc"

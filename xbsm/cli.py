@@ -147,9 +147,10 @@ def _draw_or_warn(result_file: Path, directory: Path) -> list[Path]:
     try:
         with deferred():  # a signal waits for the figure being drawn (never inside matplotlib)
             return draw(result_file, directory)
-    except Interrupted:
+    except Interrupted as err:
         print(f"xbsm run: {result_file} is complete; the figures were interrupted: draw them "
               f"with `xbsm plot {result_file}`", file=sys.stderr)
+        err.result_complete = True  # main then says nothing of resuming: a rerun is refused
         raise
     except (StudyError, OSError, ValueError, RuntimeError) as err:
         print(f"xbsm run: warning: {result_file} is complete, but its standard figures were "
@@ -291,6 +292,8 @@ def main(argv=None) -> int:
                 parser.exit(2, f"xbsm {args.command}: {err}\n")
         except KeyboardInterrupt as err:
             code = getattr(err, "exit_code", 130)
+            if getattr(err, "result_complete", False):  # only the figures were cut short
+                parser.exit(code)
             parser.exit(code, f"xbsm {args.command}: interrupted; finished chunks are kept, run "
                         "the same command again to resume\n")
     return 0
