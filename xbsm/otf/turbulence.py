@@ -605,8 +605,8 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
     n_wavelength = np.shape(wl)[-1]
     # The axes along which the exponents vary (frequency, r0, aperture) go innermost, so
     # that every ufunc runs along them and the exponentials broadcast over the others (a
-    # visibility axis of 2 innermost made numpy's loops two values long), and they are
-    # the ones cut into blocks first.
+    # visibility axis of 2 innermost made numpy's loops two values long); :func:`_blocks`
+    # says which axes a block keeps whole.
     varies = [n > 1 for n in np.broadcast_shapes(
         *(np.shape(inputs[i])[1:] for i in (0, 1, 4, 5)))]
     order = ([i for i, v in enumerate(varies) if not v]
@@ -625,8 +625,7 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
     for index in _blocks(total.shape, [varies[i] for i in order]):
         radial_, r0_ref_, diameter_, reference_, exponent_ = (
             _block_of(a, index) for a in (radial, r0_ref, diameter, reference, exponent))
-        shares_ = shares[(slice(None), slice(None)) + tuple(
-            i if n > 1 else slice(None) for i, n in zip(index, shares.shape[2:], strict=True))]
+        shares_ = _block_of(shares, index, lead=2)
         # the frequency's power once per block, not once per wavelength and scenario
         radial_5_3 = radial_ ** (5.0 / 3.0)
         tilt = _tilt_exponent(radial_, r0_ref_, diameter_, reference_)
@@ -648,10 +647,10 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
     return np.ascontiguousarray(np.transpose(total, np.argsort(order))).reshape(shape)
 
 
-def _block_of(a, index):
-    """Entries ``index`` of ``a``'s axes after its first (wavelength) axis; size-1 axes whole."""
-    return a[(slice(None),) + tuple(i if n > 1 else slice(None)
-                                    for i, n in zip(index, a.shape[1:], strict=True))]
+def _block_of(a, index, lead=1):
+    """Entries ``index`` of ``a``'s axes after its ``lead`` first ones; size-1 axes whole."""
+    return a[(slice(None),) * lead + tuple(i if n > 1 else slice(None)
+                                           for i, n in zip(index, a.shape[lead:], strict=True))]
 
 
 def _tilt_exponent(radial, r0_ref, aperture_diameter, reference):
