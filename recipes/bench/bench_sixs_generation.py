@@ -29,9 +29,9 @@ Writes ``docs/benchmarks/bench_sixs_generation.json``. Needs the extra ``sixs``:
 (the database's first 20 altitudes and 40 ground ranges; visibilities 23, 10 and 5 km) on
 one camera band, the Olson red band's 17 default-grid samples, with
 ``generate_database(workers=2)``: measured, not extrapolated. Its finished slabs are kept
-in ``--work`` (default ``/tmp/xbsm-band-cube.parts``), so an interrupted run resumes; the
-wall time of every session of the run is recorded. The file is then opened as an xbsm
-database and used for a NIIRS, and the result goes to
+in ``--work`` (default ``xbsm-band-cube.parts`` in the system's temporary folder), so an
+interrupted run resumes; the wall time of every session of the run is recorded. The file
+is then opened as an xbsm database and used for a NIIRS, and the result goes to
 ``docs/benchmarks/bench_sixs_band_cube.json``::
 
     python recipes/bench/bench_sixs_generation.py --band-cube
@@ -232,7 +232,7 @@ def band_cube(work: Path) -> None:
 def main():
     if "--band-cube" in sys.argv:
         work = Path(sys.argv[sys.argv.index("--work") + 1]) if "--work" in sys.argv \
-            else Path("/tmp/xbsm-band-cube.parts")
+            else Path(tempfile.gettempdir()) / "xbsm-band-cube.parts"
         band_cube(work)
         return
     report = {"load_start": load(), "per_run": per_run()}
