@@ -22,9 +22,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 
-import netCDF4
 import numpy as np
 import xarray as xr
+
+from .._netcdf import netcdf_file
 
 __all__ = [
     "ALTITUDES",
@@ -248,7 +249,7 @@ def check_supported(path) -> None:
                 f"{path}: coordinate {name} spans [{values[0]:g}, {values[-1]:g}] {units}; xbsm "
                 f"supports only [{lo:g}, {hi:g}] {units} yet (the parameter limits are the "
                 "shipped database's)")
-    with netCDF4.Dataset(path) as nc:
+    with netcdf_file(path) as nc:
         reflectance = float(nc.getncattr("surface_reflectance_of_database"))
     if reflectance != SURFACE_REFLECTANCE:
         raise ValueError(
@@ -313,7 +314,7 @@ def open_atmosphere(path=None, chunks=_FILE_CHUNKS) -> xr.Dataset:
     file = str(database_path(path))
     load_database(file)  # a clear error for a file that is not the database
     if isinstance(chunks, MappingProxyType):
-        with netCDF4.Dataset(file) as nc:
+        with netcdf_file(file) as nc:
             chunks = dict(zip(nc["atmosphere"].dimensions, nc["atmosphere"].chunking(),
                               strict=True))
     # open without dask, load the small coordinates, then chunk only the cube, so
@@ -406,7 +407,7 @@ def _stamp(file: Path):
 def _read(path: str, stamp=None) -> Database:
     """Read the database file ``path`` into memory (once per process, path and stamp)."""
     try:
-        with netCDF4.Dataset(path) as nc:
+        with netcdf_file(path) as nc:
             nc.set_auto_maskandscale(False)
             cube = nc["atmosphere"][...]
             coords = {name: np.asarray(nc[name][...], dtype=np.float64)
@@ -456,7 +457,7 @@ def database_visibilities(path=None) -> tuple:
 def _visibilities(path: str, stamp=None) -> tuple:
     """The ``visibility`` coordinate of ``path`` (or :func:`load_database`'s error)."""
     try:
-        with netCDF4.Dataset(path) as nc:
+        with netcdf_file(path) as nc:
             return tuple(float(v) for v in np.asarray(nc["visibility"][...], dtype=np.float64))
     except (OSError, RuntimeError, KeyError, IndexError):
         return tuple(float(v) for v in load_database(path).visibility)  # raises the error
@@ -485,7 +486,7 @@ def database_conditions(path=None) -> dict:
 def _conditions(path: str, stamp=None) -> tuple:
     """``((name, values), ...)`` of ``path``: its visibility and condition coordinates."""
     try:
-        with netCDF4.Dataset(path) as nc:
+        with netcdf_file(path) as nc:
             names = (*nc["atmosphere"].dimensions[:-5], "visibility")
             return tuple((name, tuple(float(v) for v in np.asarray(nc[name][...], dtype=float)))
                          for name in names)

@@ -18,10 +18,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import netCDF4
 import numpy as np
 import xarray as xr
 
+from .._netcdf import netcdf_file
 from ..constants import EARTH_RADIUS
 from .database import COMPONENTS, CONDITIONS
 
@@ -464,7 +464,10 @@ def write_database(cube: xr.Dataset, path, *, complevel: int = 4) -> Path:
     dims = cube["atmosphere"].dims  # the conditions, if any, then DIMS
     sizes = [cube.sizes[d] for d in dims]
     order = (*dims[:-len(DIMS)], *_ORDER)
-    with netCDF4.Dataset(path, "w", format="NETCDF4") as nc:
+    # in memory before the file is opened: a lazy read inside netcdf_file would wait for
+    # the lock the writing holds
+    cube = cube.compute()
+    with netcdf_file(path, "w", format="NETCDF4") as nc:
         nc.setncatts(dict(cube.attrs))
         for dim, size in zip(dims, sizes, strict=True):
             nc.createDimension(dim, size)

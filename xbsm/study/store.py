@@ -25,11 +25,11 @@ from pathlib import Path
 
 import dask.local
 import dask.threaded
-import netCDF4
 import numpy as np
 import xarray as xr
 from dask.highlevelgraph import HighLevelGraph
 
+from .._netcdf import netcdf_file
 from ..interrupts import completing, deferred, handling_signals, stop_if_interrupted
 from . import _parts
 from ._lock import OutputLock
@@ -299,7 +299,7 @@ def _storage_chunks(var: xr.DataArray, dtype: np.dtype) -> tuple | None:
 def _stream(result, skeleton, grid, parts, print_, partial: Path, progress) -> None:
     """Create ``partial`` from the skeleton and write every chunk file's blocks into it."""
     dims = {name: var.dims for name, var in result.data_vars.items()}
-    with netCDF4.Dataset(partial, "w") as nc:
+    with netcdf_file(partial, "w") as nc:
         _write_skeleton(nc, skeleton)
         _define(nc, result)
         for index in grid.indices():
