@@ -366,7 +366,8 @@ def _with_kinks(edges, cutoffs, count, steps, kinks):
     taken = np.zeros((count + 1, cutoffs.size), dtype=bool)
     added = np.full(kinks.shape, np.nan)
     for row, fraction in enumerate(kinks):
-        near = np.rint(np.nan_to_num(fraction) * count).astype(np.int64)
+        # NaN (no kink) as 0, a row that moves nothing; np.where, not nan_to_num (15 us a call)
+        near = np.rint(np.where(np.isnan(fraction), 0.0, fraction) * count).astype(np.int64)
         movable = np.isfinite(fraction) & (near >= 1) & (near <= count - 1)
         movable &= ~taken[near, columns]
         edges[steps + near[movable], columns[movable]] = fraction[movable] * cutoffs[movable]

@@ -552,8 +552,9 @@ def band_wavelengths(wavelength_min: float, wavelength_max: float, band_edges: s
     inside = grid[(grid > wavelength_min * (1 + tol)) & (grid < wavelength_max * (1 - tol))]
     lo_index = max(np.searchsorted(grid, wavelength_min * (1 + tol), side="right") - 1, 0)
     hi_index = min(np.searchsorted(grid, wavelength_max * (1 - tol)), grid.size - 1)
-    lo_near = np.isclose(grid[lo_index], wavelength_min, rtol=tol, atol=0)
-    hi_near = np.isclose(grid[hi_index], wavelength_max, rtol=tol, atol=0)
+    # numpy.isclose's test with atol 0, on two scalars (isclose costs 14 us a call)
+    lo_near = abs(grid[lo_index] - wavelength_min) <= tol * abs(wavelength_min)
+    hi_near = abs(grid[hi_index] - wavelength_max) <= tol * abs(wavelength_max)
     lo = grid[lo_index] if lo_near else wavelength_min
     hi = grid[hi_index] if hi_near else wavelength_max
     samples = np.concatenate([[lo], inside, [hi]])
