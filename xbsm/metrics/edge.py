@@ -215,8 +215,10 @@ def _matmul_in_stacks(a, b):
     if whole:
         stacked = np.reshape(a[:, :whole], (groups, whole // STACK_ROWS, STACK_ROWS, k))
         out[:, :whole] = np.reshape(np.matmul(stacked, b[:, None]), (groups, whole, -1))
-    if whole < rows:
-        out[:, whole:] = np.matmul(a[:, whole:], b)
+    if whole < rows:  # the last rows padded to a whole stack: every row, one BLAS kernel
+        last = np.zeros((groups, STACK_ROWS, k))
+        last[:, :rows - whole] = a[:, whole:]
+        out[:, whole:] = np.matmul(last, b)[:, :rows - whole]
     return out
 
 
