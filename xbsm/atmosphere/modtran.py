@@ -421,6 +421,13 @@ def _csv_number(token, name, path, lineno):
 
 def _csv_block(lines, start, path):
     """One ``case index N = {`` ... ``}`` block from line index ``start``: (Dataset, next)."""
+    head, counts, names, header = _csv_header(lines, start, path)
+    table, end = _csv_rows(lines, header + 2, counts["num freq"], names, start, path)
+    return _csv_dataset(table, names, head, counts, path, start, header), end + 1
+
+
+def _csv_header(lines, start, path):
+    """A block's opening line, its counts and its column names; and the header's line index."""
     head = _CSV_CASE.match(lines[start].strip())
     if head is None:
         _fail(path, start + 1, "expected 'case index <N> = {' (the start of a CSVPRNT block); "
@@ -451,7 +458,12 @@ def _csv_block(lines, start, path):
         _fail(path, i + 1, f"spectral column {names[0]!r} is not {sorted(_CSV_SPECTRAL)} (the "
                            "only one seen in a public CSVPRNT file: the _scan.csv of a run "
                            "with XFLAG N); read the run's .tp7 or .7sc instead")
-    nfreq, rows, first_row = counts["num freq"], [], i + 2
+    return head, counts, names, i
+
+
+def _csv_rows(lines, first_row, nfreq, names, start, path):
+    """A block's ``nfreq`` rows from line index ``first_row``: (table, index of its '}')."""
+    ncol, rows = len(names), []
     for k in range(first_row, first_row + nfreq):
         if k >= len(lines) or lines[k].strip() == "}":
             _fail(path, min(k, len(lines) - 1) + 1,
@@ -483,7 +495,7 @@ def _csv_block(lines, start, path):
         _fail(path, first_row + k + 1, f"the spectral column {names[0]} is not strictly "
                                        f"monotone ({float(grid[k - 1])!r} then "
                                        f"{float(grid[k])!r})")
-    return _csv_dataset(table, names, head, counts, path, start, i), end + 1
+    return table, end
 
 
 def _csv_dataset(table, names, head, counts, path, start, header):
