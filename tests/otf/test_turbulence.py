@@ -184,3 +184,32 @@ def test_polychromatic_kernel_values_do_not_depend_on_the_block(monkeypatch, blo
         got = t.polychromatic_kernel(*case)
         assert got.shape == expected.shape
         assert np.array_equal(got, expected)
+
+
+@pytest.mark.parametrize("block", [2**6, 2**11, 2**15])
+def test_polychromatic_kernel_sums_shared_scenarios_as_matrix_products(monkeypatch, block):
+    """Where only the exposure, the wind or the weights vary along an axis (an
+    integration-time or visibility sweep), a block's sums over the wavelength are matrix
+    products (``_shared_sums``); they equal the multiply-add per wavelength to a few ulp
+    (the products add in BLAS's order), on a sweep alone, crossed with a varying r0 (a
+    product per r0), and with weights that vary along both."""
+    rng = np.random.default_rng(5)
+    wl = np.linspace(0.6e-6, 0.9e-6, 31)
+    nodes = np.sort(rng.uniform(0, 3e5, 195))
+    exposure = rng.uniform(1e-3, 3e-2, (40, 1, 1))  # shared: the exponentials' axis of 40
+    cases = [
+        (nodes, np.float64(0.05), exposure[:, 0], 100.0, 0.2, 1e-6, wl, rng.uniform(0.2, 1, 31)),
+        (nodes, rng.uniform(0.01, 0.2, (7, 1)), exposure, 100.0, 0.2, 1e-6, wl,
+         rng.uniform(0.2, 1.0, 31)),
+        (nodes, rng.uniform(0.01, 0.2, (7, 1)), exposure, rng.uniform(50, 200, (40, 1, 1)), 0.2,
+         1e-6, wl, rng.uniform(0.0, 1.0, (40, 7, 1, 31))),
+    ]
+    monkeypatch.setattr(t, "_BLOCK", block)
+    for case in cases:
+        products = t.polychromatic_kernel(*case)
+        monkeypatch.setattr(t, "_SHARED_ROWS", 10**9)  # every block by multiply-adds
+        expected = t.polychromatic_kernel(*case)
+        monkeypatch.setattr(t, "_SHARED_ROWS", 4)
+        assert products.shape == expected.shape
+        # atol: the OTF's tail (as the closed-form test of the kernel)
+        np.testing.assert_allclose(products, expected, rtol=1e-14, atol=1e-16)

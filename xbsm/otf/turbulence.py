@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 
@@ -62,6 +63,14 @@ _INNER = 64
 #: 2.4 -> 1.3 ms of CPU against 2^16. Neither size changes a value (the sum runs in band
 #: order).
 _STEP = 1 << 14
+#: Scenarios sharing their exponentials (the block's axes along which only the exposure,
+#: the wind or the spectral weights vary: an integration-time or visibility sweep) from
+#: which a block's sums over the wavelength are matrix products (:func:`_shared_sums`)
+#: rather than a multiply-add per wavelength and value.
+_SHARED_ROWS = 4
+#: Rows of one such product: small enough that OpenBLAS runs it on the calling thread
+#: (one large product on its thread pool serialises two threads' calls).
+_SHARED_ROWS_PER_PRODUCT = 32
 
 
 @contract(cn2_at_1m=CN2, cn2_tropopause=CN2, cn2_upper_air=CN2, cn2_multiplier=CN2_SCALE)
@@ -622,6 +631,7 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
     # wavelength so that one multiply-add per wavelength makes both sums
     shares = np.stack(np.broadcast_arrays(w * short_share, w * (1.0 - short_share)), axis=1)
     total = np.transpose(total, order)
+    n_shared = varies.count(False)  # the first axes in ``order``
     for index in _blocks(total.shape, [varies[i] for i in order]):
         radial_, r0_ref_, diameter_, reference_, exponent_ = (
             _block_of(a, index) for a in (radial, r0_ref, diameter, reference, exponent))
@@ -630,6 +640,10 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
         radial_5_3 = radial_ ** (5.0 / 3.0)
         tilt = _tilt_exponent(radial_, r0_ref_, diameter_, reference_)
         block = total[index].shape
+        if math.prod(block[:n_shared]) >= _SHARED_ROWS:
+            sums = _shared_sums(np.exp(exponent_ * radial_5_3 + tilt), shares_, n_shared)
+            total[index] = sums[0] + np.exp(-tilt) * sums[1]
+            continue
         sums = np.zeros((2,) + block)  # short- and long-exposure parts, each over the band
         step = max(1, _STEP // max(1, sums[0].size))
         for start in range(0, n_wavelength, step):
@@ -645,6 +659,37 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
                     sums += one
         total[index] = sums[0] + np.exp(-tilt) * sums[1]
     return np.ascontiguousarray(np.transpose(total, np.argsort(order))).reshape(shape)
+
+
+def _shared_sums(short, shares, n_shared):
+    """Both sums of a block whose first ``n_shared`` axes share their exponentials (numpy).
+
+    ``short`` (wavelength, block...) is every wavelength's short-exposure OTF, size 1 on
+    those axes; ``shares`` (wavelength, 2, block...) the weights of the short- and
+    long-exposure sums. The sums over the wavelength are matrix products: rows the two
+    sums on the shared axes, columns the axes along which the weights do not vary (the
+    frequency at least), a product for each entry of the others. Returns (2, block...).
+    """
+    n = short.ndim - 1
+    varying = range(n_shared, n)
+    batch = [a for a in varying if shares.shape[2 + a] > 1]
+    columns = [a for a in varying if shares.shape[2 + a] == 1]
+    rows = np.transpose(shares, [2 + a for a in batch] + [1] + [2 + a for a in range(n_shared)]
+                        + [0] + [2 + a for a in columns])
+    values = np.transpose(short, [1 + a for a in batch] + [0]
+                          + [1 + a for a in range(n_shared)] + [1 + a for a in columns])
+    outer = rows.shape[:len(batch)]
+    rows = np.reshape(rows, (math.prod(outer), -1, short.shape[0]))
+    values = np.reshape(values, (rows.shape[0], short.shape[0], -1))
+    out = np.empty((rows.shape[0], rows.shape[1], values.shape[2]))
+    # stacks of rows small enough that BLAS runs each product on the calling thread
+    for start in range(0, rows.shape[1], _SHARED_ROWS_PER_PRODUCT):
+        stack = slice(start, start + _SHARED_ROWS_PER_PRODUCT)
+        out[:, stack] = np.matmul(rows[:, stack], values)
+    sizes = [short.shape[1 + a] for a in columns]
+    out = np.reshape(out, (*outer, 2, *shares.shape[2:2 + n_shared], *sizes))
+    where = batch + [-1] + list(range(n_shared)) + columns  # each result axis's block axis
+    return np.transpose(out, np.argsort([a + 1 for a in where]))
 
 
 def _block_of(a, index, lead=1):
