@@ -632,7 +632,17 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
     shares = np.stack(np.broadcast_arrays(w * short_share, w * (1.0 - short_share)), axis=1)
     total = np.transpose(total, order)
     n_shared = varies.count(False)  # the first axes in ``order``
-    for index in _blocks(total.shape, [varies[i] for i in order]):
+    if math.prod(total.shape[:n_shared]) >= _SHARED_ROWS:
+        # matrix products (:func:`_shared_sums`): blocks keep whole the columns (axes along
+        # which the exponents vary but the weights do not: the frequency), then the shared
+        # axes (the rows), and cut the axes along which both vary (a product for each)
+        weighted = [shares.shape[2 + a] > 1 for a in range(total.ndim)]
+        columns = [a for a in reversed(range(n_shared, total.ndim)) if not weighted[a]]
+        batch = [a for a in reversed(range(n_shared, total.ndim)) if weighted[a]]
+        blocks = _blocks_in(total.shape, columns + list(reversed(range(n_shared))) + batch)
+    else:
+        blocks = _blocks(total.shape, [varies[i] for i in order])
+    for index in blocks:
         radial_, r0_ref_, diameter_, reference_, exponent_ = (
             _block_of(a, index) for a in (radial, r0_ref, diameter, reference, exponent))
         shares_ = _block_of(shares, index, lead=2)
@@ -725,8 +735,8 @@ def _blocks(shape, varies):
     innermost varying axes until they hold :data:`_INNER` values (numpy's loops then run
     along at least that many), the axes along which nothing varies (their exponentials
     are shared, not taken again per block), the other varying axes; innermost first in
-    each group. The first axis that does not fit is cut into steps, every axis left after
-    it into single entries.
+    each group. The first axis that does not fit is cut into steps of nearly equal length,
+    every axis left after it into single entries.
     """
     inner, shared, rest, size = [], [], [], 1
     for axis in reversed(range(len(shape))):
@@ -737,7 +747,11 @@ def _blocks(shape, varies):
             size *= shape[axis]
         else:
             rest.append(axis)
-    order = inner + shared + rest
+    yield from _blocks_in(shape, inner + shared + rest)
+
+
+def _blocks_in(shape, order):
+    """:func:`_blocks` with the axes taken whole in ``order`` (every axis once)."""
     size, k = 1, 0
     while k < len(order) and size * shape[order[k]] <= _BLOCK:
         size *= shape[order[k]]
@@ -746,6 +760,7 @@ def _blocks(shape, varies):
         yield (slice(None),) * len(shape)
         return
     cut, step = order[k], max(1, _BLOCK // size)
+    step = -(-shape[cut] // -(-shape[cut] // step))  # steps of (nearly) equal length
     outer = order[k + 1:]
     for entries in np.ndindex(*(shape[i] for i in outer)):
         index = [slice(None)] * len(shape)
