@@ -6,10 +6,17 @@ crash the process. Before this lock, four threads making their first xbsm call a
 same time (each reading the atmosphere database once) ended in a segmentation fault or
 a bus error nine times out of nine (``tests/atmosphere/test_threads.py``).
 
-The lock is xarray's own HDF5 lock, the one its netCDF4 backend takes around every
-call, so xbsm's direct calls also wait for a thread reading a file through xarray. It is
-not re-entrant: inside :func:`netcdf_file` nothing may read a file through xarray (a
-lazily loaded array's ``.values``); callers bring their arrays into memory first.
+The lock is xarray's own for netCDF4 files (its netCDF-C lock and its HDF5 lock, in
+xarray's order), so xbsm's direct calls also wait for a thread reading a file through
+xarray.
+
+xarray's ``open_dataset`` reads a file's metadata outside its lock (pydata/xarray#4100,
+#9779): four threads opening the database at once crashed the interpreter. So xbsm opens
+files through xarray inside :data:`LOCK` and hands xarray the same lock
+(``open_dataset(..., lock=LOCK)``, also what the lazy reads take): the thread that holds
+:data:`LOCK` may take it again, which xarray's own locks do not allow. Inside
+:func:`netcdf_file` a lazily loaded array of a file xarray opened with its default lock
+would still wait for ever: callers bring such arrays into memory first.
 """
 
 from __future__ import annotations
@@ -19,10 +26,49 @@ import threading
 
 import netCDF4
 
-try:
-    from xarray.backends.locks import HDF5_LOCK as LOCK
+try:  # netCDF-C's lock and HDF5's, taken in xarray's one global order
+    from xarray.backends.netCDF4_ import NETCDF4_PYTHON_LOCK as _LIBRARY_LOCK
 except ImportError:  # a future xarray that moves it: xbsm's calls still exclude each other
-    LOCK = threading.Lock()
+    _LIBRARY_LOCK = threading.Lock()
+
+
+class _NestedLock:
+    """xarray's netCDF4 lock, which the thread holding it through this object may retake."""
+
+    def __init__(self):
+        self._held = threading.local()  # this thread's depth of acquires
+
+    def acquire(self, blocking: bool = True) -> bool:
+        depth = getattr(self._held, "depth", 0)
+        if not depth and not _LIBRARY_LOCK.acquire(blocking):
+            return False
+        self._held.depth = depth + 1
+        return True
+
+    def release(self) -> None:
+        self._held.depth -= 1
+        if not self._held.depth:
+            _LIBRARY_LOCK.release()
+
+    def locked(self) -> bool:
+        return _LIBRARY_LOCK.locked()
+
+    def __enter__(self) -> bool:
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    def __reduce__(self):
+        return _lock, ()  # in another process (a dask worker), that process's own lock
+
+
+LOCK = _NestedLock()
+"""The lock around every netCDF4 call of xbsm (re-entrant in the thread that holds it)."""
+
+
+def _lock() -> _NestedLock:
+    return LOCK
 
 
 @contextlib.contextmanager

@@ -4,6 +4,10 @@ netCDF-C and HDF5 are not thread-safe and netCDF4-python releases the GIL around
 Before ``xbsm._netcdf``, four threads making their first call at once (each reading the
 atmosphere database) crashed the interpreter: a segmentation fault or a bus error in 9
 of 9 runs, in ``load_database``, ``database_conditions`` and ``xbsm.scenario`` alike.
+``open_atmosphere`` and ``use_database`` open the file through xarray, whose netCDF4
+backend reads a file's metadata outside its lock (pydata/xarray#4100, #9779): four
+threads opening at once crashed the interpreter too, until xbsm held the lock around
+those opens as well.
 The first use of a file has to happen inside a fresh process (every read is cached per
 process and file), so each check runs a child interpreter and looks at how it ended.
 """
@@ -32,7 +36,7 @@ what, threads = sys.argv[1], int(sys.argv[2])
 folder = Path(tempfile.mkdtemp())
 # copies of the shipped file: each is a file no thread has read yet (the caches are per file)
 copies = [shutil.copy(atm.database_path(), folder / f"copy{i}.nc") for i in range(3)]
-barrier = threading.Barrier(threads)
+barrier = threading.Barrier(threads, timeout=120)  # a thread that died: no wait for ever
 
 def first_call(k):
     barrier.wait()
@@ -46,6 +50,17 @@ def first_call(k):
             with xr.open_dataset(copies[0], engine="netcdf4", chunks=None) as ds:
                 return float(ds["atmosphere"][0, 0, 0, 0, :5].sum())
         return float(np.nansum(atm.load_database(copies[0]).cube[0, 0, 0, 0, :5]))
+    if what == "open":  # xarray's open reads the file's metadata outside its own lock
+        for _ in range(20):  # every open reads it again: twenty rounds, all at once
+            barrier.wait()
+            ds = atm.open_atmosphere(path)
+        return float(ds["atmosphere"][0, 0, 0, 0, :5].sum())
+    if what == "use":  # use_database checks the file through xarray on entry
+        for _ in range(20):
+            barrier.wait()
+            with atm.use_database(path):
+                visibility = atm.database_conditions()["visibility"]
+        return visibility
     sc = olson_scenario(ground_range=20000.0, visibility=5.0)  # what: "model"
     return float(xbsm.snr(olson_sensor("red"), sc)["snr"])
 
@@ -60,7 +75,7 @@ print("ok", answers)
 """
 
 
-@pytest.mark.parametrize("what", ["read", "conditions", "xarray", "model"])
+@pytest.mark.parametrize("what", ["read", "conditions", "xarray", "model", "open", "use"])
 def test_first_calls_from_four_threads_at_once_do_not_crash(what):
     done = subprocess.run([sys.executable, "-c", _CHILD, what, "4"], capture_output=True,
                           text=True, timeout=300)

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import json
 import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
@@ -100,3 +103,21 @@ def test_16_bit_rgb_png_from_another_encoder_reads_back_whole(tmp_path):
     else:
         cv2.imwrite(str(tmp_path / "a.png"), img[..., ::-1])  # OpenCV's order is BGR
     np.testing.assert_array_equal(read_pixels(tmp_path / "a.png"), img)
+
+
+def test_writes_of_one_file_from_four_threads_at_once_each_succeed_whole(tmp_path):
+    # the temporary name was per process: the threads wrote into one temporary file, and
+    # all but the first to rename it raised FileNotFoundError (3 of 4 in every round)
+    path, threads = tmp_path / "a.json", 4
+    docs = [{"thread": k, "pad": "x" * (1 << 20)} for k in range(threads)]
+    barrier = threading.Barrier(threads)
+
+    def write(doc):
+        barrier.wait()
+        return write_json(path, doc)
+
+    for _ in range(5):
+        with ThreadPoolExecutor(threads) as pool:
+            list(pool.map(write, docs))
+        assert json.loads(path.read_text()) in docs
+    assert os.listdir(tmp_path) == ["a.json"]

@@ -3,6 +3,7 @@
 import math
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 
 import dask
 import numpy as np
@@ -225,6 +226,17 @@ def test_the_lock_is_reentrant_within_a_process(tiny, tmp_path):
         study.write(study.run(tiny), path, scheduler="synchronous")
         assert (tmp_path / "out.nc.lock").exists()
     assert path.exists() and not (tmp_path / "out.nc.lock").exists()
+
+
+def test_a_second_thread_writing_one_output_is_refused(tiny, tmp_path):
+    # the lock was re-entrant across threads: two threads writing one output both ran,
+    # and one failed on the other's chunk files (FileNotFoundError, 1 of 3 races)
+    path = tmp_path / "out.nc"
+    with OutputLock(path, "study A"), ThreadPoolExecutor(1) as pool:
+        other = pool.submit(study.write, study.run(tiny), path, scheduler="synchronous")
+        with pytest.raises(study.StudyError, match="being written by"):
+            other.result()
+    assert not path.exists()
 
 
 def test_the_lock_of_a_dead_process_is_taken_over(tiny, tmp_path):

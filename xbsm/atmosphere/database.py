@@ -25,7 +25,7 @@ from types import MappingProxyType
 import numpy as np
 import xarray as xr
 
-from .._netcdf import netcdf_file
+from .._netcdf import LOCK, netcdf_file
 
 __all__ = [
     "ALTITUDES",
@@ -235,7 +235,8 @@ def check_supported(path) -> None:
     from .tables import validate_database  # tables imports this module
 
     load_database(path)  # a clear error for a file that is not a database at all
-    with xr.open_dataset(path, engine="netcdf4", chunks=None) as ds:
+    # xarray reads the file's metadata outside its own lock: under xbsm's (xbsm._netcdf)
+    with LOCK, xr.open_dataset(path, engine="netcdf4", chunks=None, lock=LOCK) as ds:
         validate_database(ds.load())
         altitude, ground_range, wavelength = (
             np.asarray(ds[name].values, dtype=np.float64)
@@ -318,9 +319,11 @@ def open_atmosphere(path=None, chunks=_FILE_CHUNKS) -> xr.Dataset:
             chunks = dict(zip(nc["atmosphere"].dimensions, nc["atmosphere"].chunking(),
                               strict=True))
     # open without dask, load the small coordinates, then chunk only the cube, so
-    # that reading coordinates never needs a dask compute
-    ds = xr.open_dataset(file, engine="netcdf4", chunks=None)
-    ds = ds.assign_coords({name: ds[name].load() for name in ds.coords})
+    # that reading coordinates never needs a dask compute; under xbsm's lock, which the
+    # lazy reads of the cube take too (xarray reads metadata outside its own: xbsm._netcdf)
+    with LOCK:
+        ds = xr.open_dataset(file, engine="netcdf4", chunks=None, lock=LOCK)
+        ds = ds.assign_coords({name: ds[name].load() for name in ds.coords})
     try:
         raw = ds["atmosphere"] if chunks is None else ds["atmosphere"].chunk(chunks)
     except (TypeError, ValueError) as err:

@@ -14,18 +14,24 @@ import contextlib
 import json
 import os
 import struct
+import threading
 import zlib
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["FORMATS", "TEMP_PREFIX", "atomic_file", "atomic_write", "encode_png", "write_image",
-           "write_json"]
+__all__ = ["FORMATS", "TEMP_PREFIX", "atomic_file", "atomic_write", "encode_png", "temp_path",
+           "write_image", "write_json"]
 
 #: Image formats and their file suffixes.
 FORMATS = {"png": ".png", "tiff": ".tif"}
 #: Temporary files start with this (a crash leaves them; a resumed run removes them).
 TEMP_PREFIX = ".xbsm-partial-"
+
+
+def temp_path(path: Path) -> Path:
+    """The temporary file of ``path`` for this process and thread (:data:`TEMP_PREFIX`)."""
+    return path.with_name(f"{TEMP_PREFIX}{os.getpid()}-{threading.get_ident()}-{path.name}")
 
 
 @contextlib.contextmanager
@@ -34,10 +40,11 @@ def atomic_file(path, mode: str = "w"):
 
     Text (UTF-8) with ``mode="w"``, bytes with ``"wb"``. The data is flushed and synced
     before :func:`os.replace`; an exception (a signal) removes the temporary file and
-    leaves ``path`` as it was.
+    leaves ``path`` as it was. The temporary name is the process's and the thread's own
+    (:func:`temp_path`), so threads writing one ``path`` at once each rename a whole file.
     """
     path = Path(path)
-    temp = path.with_name(f"{TEMP_PREFIX}{os.getpid()}-{path.name}")
+    temp = temp_path(path)
     try:
         with open(temp, mode, **({} if "b" in mode else {"encoding": "utf-8"})) as handle:
             yield handle

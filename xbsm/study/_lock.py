@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 import socket
+import threading
 import time
 from pathlib import Path
 
@@ -51,15 +52,17 @@ def _owner_text(fd: int) -> str:
         return "another process"
 
 
-#: Lock files this process holds, with how many nested holders each has.
+#: Lock files this process holds: the file descriptor, how many nested holders, which thread.
 _HELD: dict = {}
 
 
 class OutputLock:
     """Exclusive right to write one output (and its parts) for the life of a run.
 
-    Re-entrant within a process: the command takes it before it builds the study
-    (so a second run is refused at once) and :func:`xbsm.study.write` again.
+    Re-entrant within a thread: the command takes it before it builds the study
+    (so a second run is refused at once) and :func:`xbsm.study.write` again. Another
+    thread of the same process is refused as another process is (the kernel's lock is
+    the process's, so it cannot tell threads apart).
     """
 
     def __init__(self, output: Path, study: str):
@@ -70,9 +73,14 @@ class OutputLock:
 
     def __enter__(self) -> OutputLock:
         key = os.path.abspath(self.path)
-        if key in _HELD:
-            _HELD[key][1] += 1
-            self.fd = _HELD[key][0]
+        held = _HELD.get(key)
+        if held is not None:
+            if held[2] != threading.get_ident():
+                raise StudyError(f"{self.output} is being written by another thread of this "
+                                 f"process ({_owner_text(held[0])}); wait for it to finish "
+                                 f"(its lock: {self.path})")
+            held[1] += 1
+            self.fd = held[0]
             return self
         while True:
             try:
@@ -98,7 +106,7 @@ class OutputLock:
         os.ftruncate(fd, 0)
         os.lseek(fd, 0, os.SEEK_SET)
         os.write(fd, json.dumps(owner).encode())
-        _HELD[key] = [fd, 1]
+        _HELD[key] = [fd, 1, threading.get_ident()]
         return self
 
     def __exit__(self, *exc) -> None:

@@ -562,7 +562,7 @@ def _write_table(path: Path, rows, dataset, cells, study) -> None:
                 "scenario": ("scenario", [cell.name for cell in cells])},
         attrs={"title": study.title or "xbsm image dataset study", "Conventions": "CF-1.8",
                "xbsm_study": study.text})
-    temp = path.with_name(f"{writers.TEMP_PREFIX}{os.getpid()}-{path.name}")
+    temp = writers.temp_path(path)
     try:
         ds.to_netcdf(temp)
         os.replace(temp, path)
