@@ -21,8 +21,10 @@ import functools
 import itertools
 import os
 import shutil
+import sys
 import threading
 import uuid
+import warnings
 from pathlib import Path
 
 import dask.local
@@ -55,6 +57,32 @@ _WORKER_START_SECONDS = 120
 #: The key is left out of the settings rather than set to None: distributed 2023.6 (the
 #: floor) passes None on as the string "None".
 _TRIM_SETTING = "MALLOC_TRIM_THRESHOLD_"
+
+
+#: On Linux a LocalCluster's workers are forked from the process that built the study
+#: rather than spawned: they start with xbsm imported and the atmosphere database read.
+#: Spawned, each worker imported xbsm (1.2-1.5 s) and made a slow first model call (about
+#: 1 s more) before its first chunk began 2.7-2.9 s after the cluster was up, and the
+#: cluster itself took 1.6-2.0 s to start instead of 0.6-0.7 s (a 3 x 10^5-scenario cut of
+#: recipes/studies/million.toml on 2 cores: 16.8-21.1 s spawned, 12.1-16.1 s forked).
+#: The forking thread is distributed's event loop; the process's other threads wait (the
+#: caller in the cluster's start, distributed's idle executors), so no lock is held across
+#: the fork. Not on macOS (fork is unsafe with its system libraries) nor Windows.
+_FORK = sys.platform == "linux"
+
+
+def _start_method() -> dict:
+    """How a new LocalCluster starts its worker processes (see _FORK)."""
+    return {"distributed.worker.multiprocessing-method": "fork"} if _FORK else {}
+
+
+@contextlib.contextmanager
+def _forking():
+    """Python 3.12+'s warning about a fork in a threaded process, silenced for _FORK."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", r"This process \(pid=\d+\) is multi-threaded, use "
+                                r"of fork\(\) may lead to deadlocks", DeprecationWarning)
+        yield
 
 
 def _worker_environ() -> dict:
@@ -262,8 +290,8 @@ def _distributed_client(scheduler: str, workers: int, cluster_stack=None):
     with contextlib.ExitStack() as stack:
         if scheduler == "local-cluster":
             # dashboard on a free port: a busy 8787 makes distributed retry and leak a socket;
-            # glibc's default heap trimming (see _TRIM_SETTING)
-            with dask.config.set(_worker_environ()):
+            # glibc's default heap trimming (see _TRIM_SETTING); workers forked (_FORK)
+            with dask.config.set({**_worker_environ(), **_start_method()}), _forking():
                 cluster = (cluster_stack or stack).enter_context(LocalCluster(
                     n_workers=workers, threads_per_worker=1, dashboard_address=":0"))
             client = stack.enter_context(Client(cluster))
