@@ -56,6 +56,25 @@ def _owner_text(fd: int) -> str:
 _HELD: dict = {}
 
 
+def _forget_in_child() -> None:
+    """In a forked child (a LocalCluster worker, see ``store._FORK``): close the lock files.
+
+    ``flock`` belongs to the open file, which a fork shares: a worker left running after
+    its run died would keep the output locked. Closing the child's copy leaves the
+    parent's lock held.
+    """
+    for fd, _ in _HELD.values():
+        try:
+            os.close(fd)
+        except OSError:
+            pass
+    _HELD.clear()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_in_child)
+
+
 class OutputLock:
     """Exclusive right to write one output (and its parts) for the life of a run.
 

@@ -6,10 +6,10 @@ study and method, the atmosphere database, xbsm's version and code, numpy and
 scipy), and keeps finished chunks in ``OUT.nc.parts/`` only while the
 fingerprint matches (:mod:`._parts`). It computes the missing chunks in batches
 (the graph of a batch is culled once, so set-up grows linearly with the study)
-on the local threads or a ``dask.distributed`` cluster, saving each as soon as it
-is done. Then it streams the chunk files into ``OUT.nc.partial`` one chunk at a
-time, with signals deferred to the gaps between writes
-(:mod:`xbsm.interrupts`), and renames it to ``OUT.nc``: a file with the output's
+on the local threads, or one task per chunk on a ``dask.distributed`` cluster,
+saving each as soon as it is done. Then it streams the chunk files into
+``OUT.nc.partial`` one chunk at a time, with signals deferred to the gaps between
+writes (:mod:`xbsm.interrupts`), and renames it to ``OUT.nc``: a file with the output's
 name is always complete and holds only this run's numbers.
 """
 
@@ -21,6 +21,10 @@ import functools
 import itertools
 import os
 import shutil
+import sys
+import threading
+import uuid
+import warnings
 from pathlib import Path
 
 import dask.local
@@ -53,6 +57,40 @@ _WORKER_START_SECONDS = 120
 #: The key is left out of the settings rather than set to None: distributed 2023.6 (the
 #: floor) passes None on as the string "None".
 _TRIM_SETTING = "MALLOC_TRIM_THRESHOLD_"
+
+
+#: On Linux a LocalCluster's workers are forked from the process that built the study
+#: rather than spawned: they start with xbsm imported and the atmosphere database read.
+#: Spawned, each worker imported xbsm (1.2-1.5 s) and made a slow first model call (about
+#: 1 s more) before its first chunk began 2.7-2.9 s after the cluster was up, and the
+#: cluster itself took 1.6-2.0 s to start instead of 0.6-0.7 s (a 3 x 10^5-scenario cut of
+#: recipes/studies/million.toml on 2 cores: 16.8-21.1 s spawned, 12.1-16.1 s forked).
+#: The forking thread is distributed's event loop; the process's other threads wait (the
+#: caller in the cluster's start, distributed's idle executors), so no lock is held across
+#: the fork. Not on macOS (fork is unsafe with its system libraries) nor Windows.
+_FORK = sys.platform == "linux"
+
+
+def _start_method() -> dict:
+    """How a new LocalCluster starts its worker processes (see _FORK)."""
+    return {"distributed.worker.multiprocessing-method": "fork"} if _FORK else {}
+
+
+#: A LocalCluster's workers run without distributed's statistical profiler (a thread
+#: that samples the computing thread's stack every 10 ms, for the dashboard's profile
+#: page): with it a worker's process used 19 % more CPU than its computing thread, 6 %
+#: without (7 chunks of recipes/studies/million.toml, getrusage per thread and process),
+#: CPU its sibling worker lacks when there are as many workers as cores.
+_WORKER_SETTINGS = {"distributed.worker.profile.enabled": False}
+
+
+@contextlib.contextmanager
+def _forking():
+    """Python 3.12+'s warning about a fork in a threaded process, silenced for _FORK."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", r"This process \(pid=\d+\) is multi-threaded, use "
+                                r"of fork\(\) may lead to deadlocks", DeprecationWarning)
+        yield
 
 
 def _worker_environ() -> dict:
@@ -171,36 +209,87 @@ def _batches(items: list, size: int):
         yield items[start:start + size]
 
 
-def _compute_missing(result, grid, parts, print_, missing, scheduler, workers, progress):
-    """Compute and save the chunks in ``missing``, batch after batch."""
+def _compute_missing(result, grid, parts, print_, missing, scheduler, workers, progress,
+                     cluster=None):
+    """Compute and save the chunks in ``missing``.
+
+    On the local threads batch after batch; on ``dask.distributed`` chunk by chunk as
+    workers free up (:func:`_compute_distributed`). A new LocalCluster is entered into
+    ``cluster`` if given (an ExitStack the caller closes, so that the cluster stops while
+    the file is assembled), else stopped here.
+    """
+    if not missing:
+        return
     graph = HighLevelGraph.merge(*(var.data.__dask_graph__() for var in result.data_vars.values()))
     variables = [(name, var.data.name, var.dims) for name, var in result.data_vars.items()]
-    with _runner(scheduler, workers) as run_graph:
-        local = scheduler in ("threads", "synchronous")
+    if scheduler in ("threads", "synchronous"):
+        run_graph = (functools.partial(dask.threaded.get, num_workers=workers)
+                     if scheduler == "threads" else dask.local.get_sync)
         for batch in _batches(missing, max(1, workers) * _BATCH_PER_WORKER):
-            dsk, keys = _batch_graph(variables, grid, graph, batch, parts, print_,
-                                     progress.add if local else None)
+            dsk, keys = _batch_graph(variables, grid, graph, batch, parts, print_, progress.add)
             run_graph(dsk, keys)
-            if not local:
-                progress.add(len(batch))
             stop_if_interrupted()
+        return
+    with _distributed_client(scheduler, workers, cluster) as client:
+        _compute_distributed(client, _chunk_tasks(variables, grid, graph, missing, parts,
+                                                  print_, workers), progress)
+
+
+def _run_chunk(dsk: dict, key) -> None:
+    """Compute one chunk's graph up to its save task, in the worker, with no scheduler."""
+    dask.local.get_sync(dsk, key)
+
+
+def _chunk_tasks(variables, grid, graph, missing, parts, print_, workers):
+    """``(chunk index, task)`` per missing chunk: one task computes and saves the chunk.
+
+    The graph is culled once per batch, as on the threads, then cut into each chunk's own
+    part (about 40 tasks, 15 kB pickled, in recipes/studies/million.toml).
+    """
+    from dask.optimization import cull
+
+    for batch in _batches(missing, max(1, workers) * _BATCH_PER_WORKER):
+        dsk, saves = _batch_graph(variables, grid, graph, batch, parts, print_, None)
+        for key in saves:
+            yield key[1:], functools.partial(_run_chunk, cull(dsk, [key])[0], key)
+
+
+def _compute_distributed(client, tasks, progress) -> None:
+    """Run the chunk tasks on the cluster, twice as many in flight as it has threads.
+
+    A worker computes and saves a chunk in one task and goes on to the next at once: no
+    barrier between batches, no transfer between workers, one chunk in a worker's memory
+    at a time. Each finished chunk is counted as it ends; a signal stops the run at the
+    next one and the chunks still running are cancelled (those saved are kept).
+    """
+    from dask.distributed import as_completed
+
+    run = uuid.uuid4().hex[:12]  # this run's keys, on a cluster others may share
+    slots = 2 * max(1, sum(client.nthreads().values()))
+    tasks = iter(tasks)
+
+    def submit(count):
+        return [client.submit(task, key=(f"xbsm-chunk-{run}", *index), pure=False)
+                for index, task in itertools.islice(tasks, count)]
+
+    running = as_completed(submit(slots))
+    try:
+        for future in running:
+            future.result()  # a chunk's error ends the run here
+            progress.add()
+            stop_if_interrupted()
+            running.update(submit(1))
+    finally:
+        client.cancel(list(running.futures))
 
 
 @contextlib.contextmanager
-def _runner(scheduler: str, workers: int):
-    """A function that runs a graph to the given keys on the chosen scheduler."""
-    if scheduler == "threads":
-        yield functools.partial(dask.threaded.get, num_workers=workers)
-    elif scheduler == "synchronous":
-        yield dask.local.get_sync
-    else:
-        with _distributed_client(scheduler, workers) as client:
-            yield client.get
+def _distributed_client(scheduler: str, workers: int, cluster_stack=None):
+    """A dask.distributed client: of a new LocalCluster, or of the cluster at an address.
 
-
-@contextlib.contextmanager
-def _distributed_client(scheduler: str, workers: int):
-    """A dask.distributed client: of a new LocalCluster, or of the cluster at an address."""
+    A new LocalCluster is entered into ``cluster_stack`` if given (an ExitStack, which may
+    be closed in another thread: the client is closed here), else closed with the client.
+    """
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError:
@@ -209,9 +298,11 @@ def _distributed_client(scheduler: str, workers: int):
     with contextlib.ExitStack() as stack:
         if scheduler == "local-cluster":
             # dashboard on a free port: a busy 8787 makes distributed retry and leak a socket;
-            # glibc's default heap trimming (see _TRIM_SETTING)
-            with dask.config.set(_worker_environ()):
-                cluster = stack.enter_context(LocalCluster(
+            # glibc's default heap trimming (see _TRIM_SETTING); workers forked (_FORK), no
+            # profiler (_WORKER_SETTINGS)
+            with dask.config.set({**_worker_environ(), **_start_method(), **_WORKER_SETTINGS}), \
+                    _forking():
+                cluster = (cluster_stack or stack).enter_context(LocalCluster(
                     n_workers=workers, threads_per_worker=1, dashboard_address=":0"))
             client = stack.enter_context(Client(cluster))
             try:  # a cluster whose workers never came up would wait for them forever
@@ -224,6 +315,27 @@ def _distributed_client(scheduler: str, workers: int):
             yield client
         else:
             yield stack.enter_context(Client(scheduler))
+
+
+class _Background:
+    """A function run in a thread; :meth:`join` waits for it and raises what it raised."""
+
+    def __init__(self, function):
+        self._error = None
+        self._thread = threading.Thread(target=self._run, args=(function,), daemon=True,
+                                        name="xbsm-background")
+        self._thread.start()
+
+    def _run(self, function):
+        try:
+            function()
+        except BaseException as err:  # noqa: BLE001 - handed to join
+            self._error = err
+
+    def join(self) -> None:
+        self._thread.join()
+        if self._error is not None:
+            raise self._error
 
 
 # --- streaming the chunks into one NetCDF file ------------------------------------------
@@ -413,8 +525,14 @@ def write(result: xr.Dataset, path, *, overwrite: bool = False, scheduler: str =
         if progress:
             say(f"{len(done)} of {grid.count} chunks already done; computing {len(missing)} "
                 f"with {workers} worker(s) ({scheduler})")
-        _compute_missing(result, grid, parts, print_, missing, scheduler, workers,
-                         Progress("chunks computed", len(missing), enabled=progress))
-        _assemble(result, grid, parts, print_, path, progress)
+        with contextlib.ExitStack() as cluster:
+            _compute_missing(result, grid, parts, print_, missing, scheduler, workers,
+                             Progress("chunks computed", len(missing), enabled=progress),
+                             cluster)
+            closing = _Background(cluster.pop_all().close)  # a LocalCluster takes ~0.5-1 s
+        try:
+            _assemble(result, grid, parts, print_, path, progress)
+        finally:
+            closing.join()
         shutil.rmtree(parts, ignore_errors=True)
     return path
