@@ -63,7 +63,7 @@ def _forget_in_child() -> None:
     its run died would keep the output locked. Closing the child's copy leaves the
     parent's lock held.
     """
-    for fd, _ in _HELD.values():
+    for fd, *_ in _HELD.values():
         try:
             os.close(fd)
         except OSError:
