@@ -611,7 +611,6 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
     # every input with the wavelength axis first and the result's axes after it
     inputs = [np.moveaxis(np.reshape(a, (1,) * (ndim - np.ndim(a)) + np.shape(a)), -1, 0)
               for a in inputs]
-    n_wavelength = np.shape(wl)[-1]
     # The axes along which the exponents vary (frequency, r0, aperture) go innermost, so
     # that every ufunc runs along them and the exponentials broadcast over the others (a
     # visibility axis of 2 innermost made numpy's loops two values long); :func:`_blocks`
@@ -632,17 +631,7 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
     shares = np.stack(np.broadcast_arrays(w * short_share, w * (1.0 - short_share)), axis=1)
     total = np.transpose(total, order)
     n_shared = varies.count(False)  # the first axes in ``order``
-    if math.prod(total.shape[:n_shared]) >= _SHARED_ROWS:
-        # matrix products (:func:`_shared_sums`): blocks keep whole the columns (axes along
-        # which the exponents vary but the weights do not: the frequency), then the shared
-        # axes (the rows), and cut the axes along which both vary (a product for each)
-        weighted = [shares.shape[2 + a] > 1 for a in range(total.ndim)]
-        columns = [a for a in reversed(range(n_shared, total.ndim)) if not weighted[a]]
-        batch = [a for a in reversed(range(n_shared, total.ndim)) if weighted[a]]
-        blocks = _blocks_in(total.shape, columns + list(reversed(range(n_shared))) + batch)
-    else:
-        blocks = _blocks(total.shape, [varies[i] for i in order])
-    for index in blocks:
+    for index in _kernel_blocks(total.shape, [varies[i] for i in order], shares.shape, n_shared):
         radial_, r0_ref_, diameter_, reference_, exponent_ = (
             _block_of(a, index) for a in (radial, r0_ref, diameter, reference, exponent))
         shares_ = _block_of(shares, index, lead=2)
@@ -652,23 +641,50 @@ def polychromatic_kernel(radial, r0_ref, exposure, speed, diameter, reference, w
         block = total[index].shape
         if math.prod(block[:n_shared]) >= _SHARED_ROWS:
             sums = _shared_sums(np.exp(exponent_ * radial_5_3 + tilt), shares_, n_shared)
-            total[index] = sums[0] + np.exp(-tilt) * sums[1]
-            continue
-        sums = np.zeros((2,) + block)  # short- and long-exposure parts, each over the band
-        step = max(1, _STEP // max(1, sums[0].size))
-        for start in range(0, n_wavelength, step):
-            # Eq. 3-3's short-exposure OTF: exp(long-exposure exponent + tilt exponent)
-            short = exponent_[start:start + step] * radial_5_3 + tilt
-            np.exp(short, out=short)
-            terms = (shares_[start:start + step] if shares_.shape[0] > 1 else shares_) * (
-                short[:, None])
-            if start == 0:  # a sum over the first axis adds in its order: from 0, the same bits
-                np.add.reduce(terms, axis=0, out=sums)
-            else:
-                for one in terms:  # band order, whatever the step
-                    sums += one
+        else:
+            sums = _sums_by_wavelength(exponent_, radial_5_3, tilt, shares_, block)
         total[index] = sums[0] + np.exp(-tilt) * sums[1]
     return np.ascontiguousarray(np.transpose(total, np.argsort(order))).reshape(shape)
+
+
+def _kernel_blocks(shape, varies, shares_shape, n_shared):
+    """The blocks :func:`polychromatic_kernel` cuts its (transposed) result ``shape`` into.
+
+    ``varies`` says along which axes the exponents vary; the first ``n_shared`` axes do
+    not (they share their exponentials). With at least :data:`_SHARED_ROWS` such rows the
+    sums become matrix products (:func:`_shared_sums`): blocks keep whole the columns
+    (axes along which the exponents vary but the weights ``shares_shape`` do not: the
+    frequency), then the shared axes (the rows), and cut the axes along which both vary (a
+    product for each). Otherwise :func:`_blocks` decides.
+    """
+    if math.prod(shape[:n_shared]) < _SHARED_ROWS:
+        return _blocks(shape, varies)
+    weighted = [shares_shape[2 + a] > 1 for a in range(len(shape))]
+    columns = [a for a in reversed(range(n_shared, len(shape))) if not weighted[a]]
+    batch = [a for a in reversed(range(n_shared, len(shape))) if weighted[a]]
+    return _blocks_in(shape, columns + list(reversed(range(n_shared))) + batch)
+
+
+def _sums_by_wavelength(exponent, radial_5_3, tilt, shares, block):
+    """Both sums of a block, a few wavelengths at a time, added in band order (numpy).
+
+    ``exponent`` (wavelength, block...) is the long-exposure exponent's factor, ``shares``
+    (wavelength, 2, block...) the weights of the short- and long-exposure sums. Returns
+    (2, block...): the short- and long-exposure parts, each over the band.
+    """
+    sums = np.zeros((2,) + block)
+    step = max(1, _STEP // max(1, sums[0].size))
+    for start in range(0, exponent.shape[0], step):
+        # Eq. 3-3's short-exposure OTF: exp(long-exposure exponent + tilt exponent)
+        short = exponent[start:start + step] * radial_5_3 + tilt
+        np.exp(short, out=short)
+        terms = (shares[start:start + step] if shares.shape[0] > 1 else shares) * short[:, None]
+        if start == 0:  # a sum over the first axis adds in its order: from 0, the same bits
+            np.add.reduce(terms, axis=0, out=sums)
+        else:
+            for one in terms:  # band order, whatever the step
+                sums += one
+    return sums
 
 
 def _shared_sums(short, shares, n_shared):
