@@ -22,6 +22,7 @@ would still wait for ever: callers bring such arrays into memory first.
 from __future__ import annotations
 
 import contextlib
+import os
 import threading
 
 import netCDF4
@@ -76,3 +77,47 @@ def netcdf_file(path, mode: str = "r", **kwargs):
     """``netCDF4.Dataset(path, mode, **kwargs)``, open only while the lock is held."""
     with LOCK, netCDF4.Dataset(path, mode, **kwargs) as nc:
         yield nc
+
+
+# --- forks that wait for the lock ---------------------------------------------------------
+#
+# A LocalCluster's workers are forked from the process that built a study
+# (``xbsm.study.store._FORK``). A fork copies the lock as it is: had another thread of the
+# parent (a notebook's background read, say) held it at that moment, the worker would start
+# with the lock taken by a thread it does not have, wait for ever at its first NetCDF call,
+# and inherit netCDF-C and HDF5 in the middle of that thread's call. While
+# :func:`forks_wait_for_the_lock` is entered anywhere in the process, every fork first
+# takes the lock (so no thread is inside the library) and both sides release it after.
+
+_waiting = 0  # how many callers have entered forks_wait_for_the_lock
+_waiting_count = threading.Lock()
+_taken_for_fork = threading.local()  # per forking thread: did its before-hook take the lock?
+
+
+def _before_fork() -> None:
+    _taken_for_fork.lock = bool(_waiting) and _LIBRARY_LOCK.acquire()
+
+
+def _after_fork() -> None:  # in the parent and in the child
+    if getattr(_taken_for_fork, "lock", False):
+        _taken_for_fork.lock = False
+        _LIBRARY_LOCK.release()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(before=_before_fork, after_in_parent=_after_fork,
+                        after_in_child=_after_fork)
+
+
+@contextlib.contextmanager
+def forks_wait_for_the_lock():
+    """While inside, a fork of this process (from any thread) waits until no thread holds
+    :data:`LOCK`, so the child starts with the lock free and the library idle."""
+    global _waiting
+    with _waiting_count:
+        _waiting += 1
+    try:
+        yield
+    finally:
+        with _waiting_count:
+            _waiting -= 1

@@ -14,8 +14,10 @@ process and file), so each check runs a child interpreter and looks at how it en
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
+import threading
 
 import pytest
 
@@ -87,3 +89,35 @@ def test_first_calls_from_four_threads_at_once_do_not_crash(what):
     # a crash ends the child on a signal: a negative return code, no "ok"
     assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
     assert done.stdout.startswith("ok"), done.stdout
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="no fork")
+@pytest.mark.filterwarnings("ignore:This process:DeprecationWarning")  # fork with threads
+def test_a_fork_waits_for_the_netcdf_lock_and_the_child_finds_it_free():
+    # A LocalCluster's workers are forked (xbsm.study.store._FORK) from distributed's event
+    # loop thread. Had another thread held the lock at that moment, the worker would find it
+    # taken by a thread it does not have and wait for ever at its first NetCDF call.
+    from xbsm._netcdf import LOCK, forks_wait_for_the_lock
+
+    read, write = os.pipe()
+    children = []
+
+    def fork():
+        pid = os.fork()
+        if pid == 0:  # the child: is the lock free here?
+            os.write(write, b"free" if LOCK.acquire(blocking=False) else b"held")
+            os._exit(0)
+        children.append(pid)
+
+    with forks_wait_for_the_lock():
+        with LOCK:  # another thread inside the library
+            forker = threading.Thread(target=fork)
+            forker.start()
+            forker.join(0.5)
+            assert forker.is_alive()  # the fork waits for the lock
+        forker.join(60)
+    assert not forker.is_alive() and children
+    os.close(write)  # a child that died without writing: end of file, not a hang
+    assert os.read(read, 4) == b"free"
+    os.waitpid(children[0], 0)
+    os.close(read)

@@ -33,7 +33,7 @@ import numpy as np
 import xarray as xr
 from dask.highlevelgraph import HighLevelGraph
 
-from .._netcdf import netcdf_file
+from .._netcdf import forks_wait_for_the_lock, netcdf_file
 from ..interrupts import completing, deferred, handling_signals, stop_if_interrupted
 from . import _parts
 from ._lock import OutputLock
@@ -65,9 +65,11 @@ _TRIM_SETTING = "MALLOC_TRIM_THRESHOLD_"
 #: 1 s more) before its first chunk began 2.7-2.9 s after the cluster was up, and the
 #: cluster itself took 1.6-2.0 s to start instead of 0.6-0.7 s (a 3 x 10^5-scenario cut of
 #: recipes/studies/million.toml on 2 cores: 16.8-21.1 s spawned, 12.1-16.1 s forked).
-#: The forking thread is distributed's event loop; the process's other threads wait (the
-#: caller in the cluster's start, distributed's idle executors), so no lock is held across
-#: the fork. Not on macOS (fork is unsafe with its system libraries) nor Windows.
+#: The forking thread is distributed's event loop; xbsm's other threads wait (the caller
+#: in the cluster's start, distributed's idle executors), and a fork waits until no thread
+#: of the process holds the NetCDF lock (``_netcdf.forks_wait_for_the_lock``), which a
+#: worker reading a database it was not forked with would otherwise find taken for ever.
+#: Not on macOS (fork is unsafe with its system libraries) nor Windows.
 _FORK = sys.platform == "linux"
 
 
@@ -86,8 +88,9 @@ _WORKER_SETTINGS = {"distributed.worker.profile.enabled": False}
 
 @contextlib.contextmanager
 def _forking():
-    """Python 3.12+'s warning about a fork in a threaded process, silenced for _FORK."""
-    with warnings.catch_warnings():
+    """Forks that wait for the NetCDF lock, and Python 3.12+'s warning about a fork in a
+    threaded process silenced, for _FORK."""
+    with forks_wait_for_the_lock(), warnings.catch_warnings():
         warnings.filterwarnings("ignore", r"This process \(pid=\d+\) is multi-threaded, use "
                                 r"of fork\(\) may lead to deadlocks", DeprecationWarning)
         yield
