@@ -95,7 +95,9 @@ _taken_for_fork = threading.local()  # per forking thread: did its before-hook t
 
 
 def _before_fork() -> None:
-    _taken_for_fork.lock = bool(_waiting) and _LIBRARY_LOCK.acquire()
+    # a thread that holds the lock itself forks with it held: it exists in the child too
+    holds = getattr(LOCK._held, "depth", 0)
+    _taken_for_fork.lock = bool(_waiting) and not holds and _LIBRARY_LOCK.acquire()
 
 
 def _after_fork() -> None:  # in the parent and in the child
