@@ -22,7 +22,6 @@ import itertools
 import os
 import shutil
 import sys
-import threading
 import uuid
 import warnings
 from pathlib import Path
@@ -212,14 +211,11 @@ def _batches(items: list, size: int):
         yield items[start:start + size]
 
 
-def _compute_missing(result, grid, parts, print_, missing, scheduler, workers, progress,
-                     cluster=None):
+def _compute_missing(result, grid, parts, print_, missing, scheduler, workers, progress):
     """Compute and save the chunks in ``missing``.
 
     On the local threads batch after batch; on ``dask.distributed`` chunk by chunk as
-    workers free up (:func:`_compute_distributed`). A new LocalCluster is entered into
-    ``cluster`` if given (an ExitStack the caller closes, so that the cluster stops while
-    the file is assembled), else stopped here.
+    workers free up (:func:`_compute_distributed`).
     """
     if not missing:
         return
@@ -233,7 +229,7 @@ def _compute_missing(result, grid, parts, print_, missing, scheduler, workers, p
             run_graph(dsk, keys)
             stop_if_interrupted()
         return
-    with _distributed_client(scheduler, workers, cluster) as client:
+    with _distributed_client(scheduler, workers) as client:
         _compute_distributed(client, _chunk_tasks(variables, grid, graph, missing, parts,
                                                   print_, workers), progress)
 
@@ -287,11 +283,12 @@ def _compute_distributed(client, tasks, progress) -> None:
 
 
 @contextlib.contextmanager
-def _distributed_client(scheduler: str, workers: int, cluster_stack=None):
+def _distributed_client(scheduler: str, workers: int):
     """A dask.distributed client: of a new LocalCluster, or of the cluster at an address.
 
-    A new LocalCluster is entered into ``cluster_stack`` if given (an ExitStack, which may
-    be closed in another thread: the client is closed here), else closed with the client.
+    A new LocalCluster is stopped with the client, in this thread: stopped from another
+    one (to overlap with the file's assembly), distributed 2023.6 (xbsm's floor) left the
+    asyncio event loop tornado made for this thread open, with its two sockets.
     """
     try:
         from dask.distributed import Client, LocalCluster
@@ -305,7 +302,7 @@ def _distributed_client(scheduler: str, workers: int, cluster_stack=None):
             # profiler (_WORKER_SETTINGS)
             with dask.config.set({**_worker_environ(), **_start_method(), **_WORKER_SETTINGS}), \
                     _forking():
-                cluster = (cluster_stack or stack).enter_context(LocalCluster(
+                cluster = stack.enter_context(LocalCluster(
                     n_workers=workers, threads_per_worker=1, dashboard_address=":0"))
             client = stack.enter_context(Client(cluster))
             try:  # a cluster whose workers never came up would wait for them forever
@@ -318,27 +315,6 @@ def _distributed_client(scheduler: str, workers: int, cluster_stack=None):
             yield client
         else:
             yield stack.enter_context(Client(scheduler))
-
-
-class _Background:
-    """A function run in a thread; :meth:`join` waits for it and raises what it raised."""
-
-    def __init__(self, function):
-        self._error = None
-        self._thread = threading.Thread(target=self._run, args=(function,), daemon=True,
-                                        name="xbsm-background")
-        self._thread.start()
-
-    def _run(self, function):
-        try:
-            function()
-        except BaseException as err:  # noqa: BLE001 - handed to join
-            self._error = err
-
-    def join(self) -> None:
-        self._thread.join()
-        if self._error is not None:
-            raise self._error
 
 
 # --- streaming the chunks into one NetCDF file ------------------------------------------
@@ -528,14 +504,8 @@ def write(result: xr.Dataset, path, *, overwrite: bool = False, scheduler: str =
         if progress:
             say(f"{len(done)} of {grid.count} chunks already done; computing {len(missing)} "
                 f"with {workers} worker(s) ({scheduler})")
-        with contextlib.ExitStack() as cluster:
-            _compute_missing(result, grid, parts, print_, missing, scheduler, workers,
-                             Progress("chunks computed", len(missing), enabled=progress),
-                             cluster)
-            closing = _Background(cluster.pop_all().close)  # a LocalCluster takes ~0.5-1 s
-        try:
-            _assemble(result, grid, parts, print_, path, progress)
-        finally:
-            closing.join()
+        _compute_missing(result, grid, parts, print_, missing, scheduler, workers,
+                         Progress("chunks computed", len(missing), enabled=progress))
+        _assemble(result, grid, parts, print_, path, progress)
         shutil.rmtree(parts, ignore_errors=True)
     return path
