@@ -79,6 +79,39 @@ def netcdf_file(path, mode: str = "r", **kwargs):
         yield nc
 
 
+def open_dataset(path):
+    """``xarray.open_dataset`` of the netCDF4 file ``path`` (read only, no dask) through
+    one netCDF4 handle per file and process, opened and closed under :data:`LOCK`.
+
+    HDF5 crashes (a segmentation fault in ``H5F_addr_decode`` under ``H5T__conv_vlen``)
+    when a file with string variables, as the atmosphere database has, is open three
+    times in one process, the oldest two handles are closed and the file is opened
+    again: no thread needed (HDFGroup/hdf5#5359, Unidata/netcdf4-python#1444; HDF5
+    1.12.2 and 2.2.0 alike). xarray gives every ``open_dataset`` a handle of its own in
+    its file cache; a dataset that is not closed keeps it open until the cache evicts
+    it, oldest first, which is that pattern: four threads each opening their own copy
+    of the database ten times with ``open_atmosphere`` crashed 10 of 10 runs with
+    ``file_cache_maxsize=4`` (standing for a process with more than 128 files open),
+    0 of 10 with this. Here every open of a file shares one cache key (path and stamp,
+    not a new id), so the process holds one handle of the file however many datasets
+    read it, plus at most one :func:`netcdf_file` (or ``check_supported``'s dataset) of
+    the thread holding the lock: two at once, which crashed in none of the orders of
+    opens and closes tried. The file manager also takes :data:`LOCK`, so closing the
+    handle when the last dataset is garbage collected happens under it too: xarray
+    2023.12 gave each manager a lock of its own, and 38 of 82 closes in that stress ran
+    outside :data:`LOCK` (0 with this).
+    """
+    import xarray as xr
+    from xarray.backends import CachingFileManager, NetCDF4DataStore
+
+    path = os.fspath(path)
+    stat = os.stat(path)  # a rewritten file gets a handle of its own
+    manager = CachingFileManager(netCDF4.Dataset, path, mode="r", lock=LOCK,
+                                 manager_id=("xbsm", stat.st_size, stat.st_mtime_ns))
+    with LOCK:  # xarray reads the metadata outside its own lock (see above)
+        return xr.open_dataset(NetCDF4DataStore(manager, mode="r", lock=LOCK), chunks=None)
+
+
 # --- forks that wait for the lock ---------------------------------------------------------
 #
 # A LocalCluster's workers are forked from the process that built a study

@@ -25,7 +25,7 @@ from types import MappingProxyType
 import numpy as np
 import xarray as xr
 
-from .._netcdf import LOCK, netcdf_file
+from .._netcdf import LOCK, netcdf_file, open_dataset
 
 __all__ = [
     "ALTITUDES",
@@ -321,8 +321,9 @@ def open_atmosphere(path=None, chunks=_FILE_CHUNKS) -> xr.Dataset:
     # open without dask, load the small coordinates, then chunk only the cube, so
     # that reading coordinates never needs a dask compute; under xbsm's lock, which the
     # lazy reads of the cube take too (xarray reads metadata outside its own: xbsm._netcdf)
+    # (one handle of the file per process however many datasets are open: _netcdf.open_dataset)
     with LOCK:
-        ds = xr.open_dataset(file, engine="netcdf4", chunks=None, lock=LOCK)
+        ds = open_dataset(file)
         ds = ds.assign_coords({name: ds[name].load() for name in ds.coords})
     try:
         raw = ds["atmosphere"] if chunks is None else ds["atmosphere"].chunk(chunks)
