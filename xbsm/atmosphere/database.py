@@ -230,17 +230,17 @@ def check_supported(path) -> None:
     ValueError
         Naming the coordinate, its values and what is supported.
     """
-    import xarray as xr
-
     from .tables import validate_database  # tables imports this module
 
     load_database(path)  # a clear error for a file that is not a database at all
-    # xarray reads the file's metadata outside its own lock: under xbsm's (xbsm._netcdf)
-    with LOCK, xr.open_dataset(path, engine="netcdf4", chunks=None, lock=LOCK) as ds:
-        validate_database(ds.load())
-        altitude, ground_range, wavelength = (
-            np.asarray(ds[name].values, dtype=np.float64)
-            for name in ("altitude", "ground_range", "wavelength"))
+    # the process's one handle of the file (xbsm._netcdf.open_dataset), not closed here:
+    # closing it would close it under every other dataset reading the same file
+    with LOCK:
+        ds = open_dataset(path).load()
+    validate_database(ds)
+    altitude, ground_range, wavelength = (
+        np.asarray(ds[name].values, dtype=np.float64)
+        for name in ("altitude", "ground_range", "wavelength"))
     limits = (("altitude", altitude, ALTITUDE_RANGE, "m"),
               ("ground_range", ground_range, GROUND_RANGE_RANGE, "m"),
               ("wavelength", wavelength, (WAVELENGTH_MIN, WAVELENGTH_MAX), "m"))
