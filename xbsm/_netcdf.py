@@ -79,9 +79,38 @@ def netcdf_file(path, mode: str = "r", **kwargs):
         yield nc
 
 
+def write_variables(nc, ds) -> None:
+    """Write an eager Dataset's variables, dimensions and attributes into the open file ``nc``.
+
+    For :func:`netcdf_file` (``mode="w"``), so that the whole write is under :data:`LOCK`:
+    xarray's ``to_netcdf`` takes its lock around data writes only, not while it creates
+    dimensions and variables (and it is the lock that :data:`LOCK` holds, so it cannot be
+    called inside it). Numbers are written as they are (no fill value, no scaling),
+    strings as netCDF strings; non-dimension coordinates are named in the global
+    ``coordinates`` attribute, where xarray reads them back as coordinates. It is also
+    cheaper: ``to_netcdf`` asks which dask scheduler runs, which imports
+    ``dask.distributed`` (0.45 s of every study's serial assembly).
+    """
+    for dim, size in ds.sizes.items():
+        nc.createDimension(dim, size)
+    for name, var in ds.variables.items():
+        values = var.values
+        if values.dtype.kind in "UO":
+            variable = nc.createVariable(name, str, var.dims)
+            variable[...] = values.astype(object)
+        else:
+            variable = nc.createVariable(name, values.dtype, var.dims, fill_value=False)
+            variable.set_auto_maskandscale(False)
+            variable[...] = values
+        variable.setncatts(var.attrs)
+    others = sorted(name for name in ds.coords if name not in ds.dims)
+    nc.setncatts({**ds.attrs, **({"coordinates": " ".join(others)} if others else {})})
+
+
 def open_dataset(path):
-    """``xarray.open_dataset`` of the netCDF4 file ``path`` (read only, no dask) through
-    one netCDF4 handle per file and process, opened and closed under :data:`LOCK`.
+    """``xarray.open_dataset`` of a netCDF4 file, through the process's one handle of it.
+
+    Read only, no dask; the handle is opened and closed under :data:`LOCK`.
 
     HDF5 crashes (a segmentation fault in ``H5F_addr_decode`` under ``H5T__conv_vlen``)
     when a file with string variables, as the atmosphere database has, is open three
@@ -146,8 +175,11 @@ if hasattr(os, "register_at_fork"):
 
 @contextlib.contextmanager
 def forks_wait_for_the_lock():
-    """While inside, a fork of this process (from any thread) waits until no thread holds
-    :data:`LOCK`, so the child starts with the lock free and the library idle."""
+    """While inside, a fork of this process (from any thread) waits for :data:`LOCK`.
+
+    It waits until no thread holds the lock, so the child starts with the lock free and
+    the library idle.
+    """
     global _waiting
     with _waiting_count:
         _waiting += 1

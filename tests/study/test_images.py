@@ -92,6 +92,11 @@ def test_the_netcdf_table_holds_every_outputs_metadata(finished):
     with xr.open_dataset(out / "sweep.nc") as table:
         assert dict(table.sizes) == {"image": 5, "scenario": 2}
         assert table.seed.dtype == np.uint64 and (table.gsd > 0.004).all()
+        # written with netCDF4 under xbsm's lock (xbsm._netcdf.write_variables), read as
+        # xarray's own writer would have it: coordinates, units and the flags' meanings
+        assert {"source_file", "reference_gsd"} <= set(table.coords)
+        assert table.gsd.attrs["units"] == "m" and "flag_meanings" in table.flags.attrs
+        assert table.file_name.dtype.kind in "OU"
         coco = COCO(str(out / "ground_range=4000" / "annotations.json"))
         assert str(int(table.seed.sel(image=12, scenario="ground_range=4000"))) == \
             coco.loadImgs(12)[0]["xbsm"]["seed"]

@@ -125,7 +125,7 @@ def test_an_interrupted_finish_leaves_no_output(tiny, tmp_path, monkeypatch):
         assert (tmp_path / "out.nc.partial").exists()
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(store, "_write_skeleton", interrupted)
+    monkeypatch.setattr(store, "write_variables", interrupted)
     path = tmp_path / "out.nc"
     with pytest.raises(KeyboardInterrupt):
         study.write(study.run(tiny), path, scheduler="synchronous")
@@ -247,7 +247,7 @@ def test_two_threads_taking_one_lock_at_once_are_told_apart(tmp_path):
         path = tmp_path / f"out{i}.nc"
         start, done, refusals = threading.Barrier(2), threading.Barrier(2), []
 
-        def take():
+        def take(path, start, done, refusals):
             start.wait()
             try:
                 with OutputLock(path, "study A"):
@@ -256,7 +256,8 @@ def test_two_threads_taking_one_lock_at_once_are_told_apart(tmp_path):
                 refusals.append(str(err))
                 done.wait()
 
-        threads = [threading.Thread(target=take) for _ in range(2)]
+        threads = [threading.Thread(target=take, args=(path, start, done, refusals))
+                   for _ in range(2)]
         for thread in threads:
             thread.start()
         for thread in threads:

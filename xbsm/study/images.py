@@ -34,6 +34,7 @@ import numpy as np
 
 from .. import flags as fl
 from .. import params
+from .._netcdf import netcdf_file, write_variables
 from ..datasets import coco as coco_labels
 from ..datasets import readers, writers
 from ..interrupts import (
@@ -564,7 +565,8 @@ def _write_table(path: Path, rows, dataset, cells, study) -> None:
                "xbsm_study": study.text})
     temp = writers.temp_path(path)
     try:
-        ds.to_netcdf(temp)
+        with netcdf_file(temp, "w") as nc:  # all of it under xbsm's NetCDF lock
+            write_variables(nc, ds)
         os.replace(temp, path)
     finally:
         temp.unlink(missing_ok=True)

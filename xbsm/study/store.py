@@ -32,7 +32,7 @@ import numpy as np
 import xarray as xr
 from dask.highlevelgraph import HighLevelGraph
 
-from .._netcdf import forks_wait_for_the_lock, netcdf_file
+from .._netcdf import forks_wait_for_the_lock, netcdf_file, write_variables
 from ..interrupts import completing, deferred, handling_signals, stop_if_interrupted
 from . import _parts
 from ._lock import OutputLock
@@ -87,8 +87,10 @@ _WORKER_SETTINGS = {"distributed.worker.profile.enabled": False}
 
 @contextlib.contextmanager
 def _forking():
-    """Forks that wait for the NetCDF lock, and Python 3.12+'s warning about a fork in a
-    threaded process silenced, for _FORK."""
+    """Forks that wait for the NetCDF lock, for :data:`_FORK`.
+
+    Python 3.12+'s warning about a fork in a threaded process is silenced meanwhile.
+    """
     with forks_wait_for_the_lock(), warnings.catch_warnings():
         warnings.filterwarnings("ignore", r"This process \(pid=\d+\) is multi-threaded, use "
                                 r"of fork\(\) may lead to deadlocks", DeprecationWarning)
@@ -326,30 +328,6 @@ def _skeleton(result: xr.Dataset, attrs: dict) -> xr.Dataset:
     return netcdf_ready(xr.Dataset(coords=coords, attrs={**result.attrs, **attrs}))
 
 
-def _write_skeleton(nc, skeleton: xr.Dataset) -> None:
-    """Write the skeleton's coordinates and attributes into the new, open file.
-
-    With netCDF4 itself: ``Dataset.to_netcdf`` asks which dask scheduler runs,
-    which imports ``dask.distributed`` (0.45 s of every threads run's serial
-    assembly).
-    """
-    for dim, size in skeleton.sizes.items():
-        nc.createDimension(dim, size)
-    for name, var in skeleton.variables.items():
-        values = var.values
-        if values.dtype.kind in "UO":
-            variable = nc.createVariable(name, str, var.dims)
-            variable[...] = values.astype(object)
-        else:
-            variable = nc.createVariable(name, values.dtype, var.dims, fill_value=False)
-            variable.set_auto_maskandscale(False)
-            variable[...] = values
-        variable.setncatts(var.attrs)
-    others = sorted(name for name in skeleton.coords if name not in skeleton.dims)
-    # where xarray puts coordinates that no variable names (the data variables follow)
-    nc.setncatts({**skeleton.attrs, **({"coordinates": " ".join(others)} if others else {})})
-
-
 def _define(nc, result: xr.Dataset) -> None:
     """Create every data variable in the open file, with its attributes and encoding."""
     for dim in {dim for var in result.data_vars.values() for dim in var.dims}:
@@ -391,7 +369,7 @@ def _stream(result, skeleton, grid, parts, print_, partial: Path, progress) -> N
     """Create ``partial`` from the skeleton and write every chunk file's blocks into it."""
     dims = {name: var.dims for name, var in result.data_vars.items()}
     with netcdf_file(partial, "w") as nc:
-        _write_skeleton(nc, skeleton)
+        write_variables(nc, skeleton)
         _define(nc, result)
         for index in grid.indices():
             stop_if_interrupted()
