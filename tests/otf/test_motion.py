@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 from otf_helpers import check_lazy, polar
 
-from xbsm.otf.motion import drift, jitter, tdi
+from xbsm.otf.motion import drift, drift_kernel, drift_slices_kernel, jitter, tdi
 
 ONE = xr.DataArray([[1.0]], dims=("fy", "fx"))
 
@@ -64,6 +64,20 @@ def test_jitter_and_drift_limits_and_sweeps():
     d = drift(fx, fy, xr.DataArray([1e-6, -1e-6], dims="d"), 0.0)
     xr.testing.assert_allclose(d.isel(d=0, drop=True), d.isel(d=1, drop=True))
     assert d.attrs["long_name"] == "Blur OTF of constant line-of-sight drift during one integration"
+
+
+def test_drift_on_the_slices_is_the_two_axis_kernel_on_them_to_the_bit():
+    # the x slice is (fx, fy) = (f, 0) and the y slice (0, f): each other-axis factor is
+    # sinc(0) = 1 exactly, so the one-sinc-per-slice kernel must give the same bits
+    rng = np.random.default_rng(7)
+    f = np.concatenate([[0.0], rng.uniform(0.0, 2e6, 300)])
+    for drift_x, drift_y in [(3e-6, 0.0), (0.0, 7e-6), (rng.uniform(0, 1e-5, (4, 1)), 2.5e-6),
+                             (np.zeros((3, 1)), np.zeros((3, 1)))]:
+        slices = drift_slices_kernel(np.asarray(drift_x), np.asarray(drift_y), f)
+        for k, (ux, uy) in enumerate([(1.0, 0.0), (0.0, 1.0)]):
+            expected = drift_kernel(np.asarray(drift_x), f * ux, np.asarray(drift_y), f * uy)
+            np.testing.assert_array_equal(slices[..., k], np.broadcast_to(expected,
+                                                                          slices.shape[:-1]))
 
 
 def test_dask_stays_lazy():

@@ -84,6 +84,22 @@ def drift_kernel(drift_x, fx, drift_y, fy):
     return along_x * along_y
 
 
+def drift_slices_kernel(drift_x, drift_y, frequency):
+    """IBSM Eq. 3-29 on the x and y slices of a radial ``frequency``, orientation last.
+
+    The x slice is fx = f, fy = 0 and the y slice fx = 0, fy = f: on each, the other
+    axis's factor is sinc(0) = 1 exactly, so the slices are ``sinc(drift_x f)`` and
+    ``sinc(drift_y f)``, the same numbers as :func:`drift_kernel` on the slices' fx and
+    fy with half its sincs (each scenario of an integration-time or drift sweep has its
+    own).
+    """
+    along_x, along_y = _drift_sinc(drift_x, frequency), _drift_sinc(drift_y, frequency)
+    out = np.empty(np.broadcast_shapes(np.shape(along_x), np.shape(along_y)) + (2,))
+    out[..., 0] = along_x
+    out[..., 1] = along_y
+    return out
+
+
 def _drift_sinc(drift, frequency):
     """sinc(drift f); without drift (every value 0, a still camera) the 1 it is, unevaluated."""
     if np.ndim(drift) and not np.any(drift):  # (an optics study: 25,000 scenarios' sincs of 0)

@@ -137,8 +137,9 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
         "detector": apply_kernel(detector_kernel, s["detector_width_x"], s["focal_length"], fx,
                               s["detector_width_y"], fy_),
         "jitter": apply_kernel(jitter_kernel, s["jitter_x"], fx, s["jitter_y"], fy_),
-        "drift": apply_kernel(_exposure_drift_kernel, s["drift_rate_x"], integration_time,
-                           s["tdi_stages"], fx, s["drift_rate_y"], fy_),
+        "drift": (apply_kernel(_exposure_drift_kernel, s["drift_rate_x"], integration_time,
+                               s["tdi_stages"], fx, s["drift_rate_y"], fy_) if fy is not None
+                  else _drift_on_slices(s, integration_time, frequency, fx)),
         # in cache-sized blocks only where there is wavefront error to evaluate: without,
         # the kernel is the sum of the weights, at once (a focal-length sweep spent 6 % of
         # its time in 1,000 blocks of that sum)
@@ -283,6 +284,30 @@ def _exposure_drift_kernel(drift_rate_x, integration_time, tdi_stages, fx, drift
     """Drift OTF over the exposure of all TDI stages (numpy)."""
     exposure = integration_time * tdi_stages
     return motion.drift_kernel(drift_rate_x * exposure, fx, drift_rate_y * exposure, fy)
+
+
+def _exposure_drift_slices_kernel(drift_rate_x, integration_time, tdi_stages, frequency,
+                                  drift_rate_y):
+    """:func:`_exposure_drift_kernel` on the x and y slices, orientation last (numpy)."""
+    exposure = integration_time * tdi_stages
+    return motion.drift_slices_kernel(drift_rate_x * exposure, drift_rate_y * exposure,
+                                      frequency)
+
+
+def _drift_on_slices(s, integration_time, frequency, fx):
+    """The drift OTF on the slices, labelled as :func:`_exposure_drift_kernel` labels it.
+
+    The same numbers with half the sincs (:func:`motion.drift_slices_kernel`); its dims
+    in the order the two-axis kernel's arguments give them (``fx`` is ``frequency``
+    times the x unit vector).
+    """
+    args = (s["drift_rate_x"], integration_time, s["tdi_stages"], frequency, s["drift_rate_y"])
+    out = apply_kernel(_exposure_drift_slices_kernel, *args, outputs=[("orientation",)],
+                       sizes={"orientation": ORIENTATION.size})
+    order = []
+    for arg in (*args[:3], fx, args[4]):
+        order += [dim for dim in getattr(arg, "dims", ()) if dim not in order]
+    return out.transpose(*order).assign_coords(orientation=ORIENTATION)
 
 
 def _turbulent_path_kernel(wind_speed, slant_range, altitude, cn2, tropopause=5.94e-53,
@@ -499,8 +524,8 @@ def system_slice_arrays(p, nodes, wavelength, spectral_weights, integration_time
         detector_kernel(p["detector_width_x"], p["focal_length"], fx, p["detector_width_y"],
                          fy),
         jitter_kernel(p["jitter_x"], fx, p["jitter_y"], fy),
-        _exposure_drift_kernel(p["drift_rate_x"], integration_time, p["tdi_stages"], fx,
-                               p["drift_rate_y"], fy),
+        _exposure_drift_slices_kernel(p["drift_rate_x"], integration_time, p["tdi_stages"],
+                                      nodes, p["drift_rate_y"]),
         _wavefront_slices(p, nodes, wl, w)]
     unfiltered = _product_kernel(*(r[:, None] for r in radial), *sliced)
     r0 = _band_r0_kernel(cn2, r0_ref, wl, w)
