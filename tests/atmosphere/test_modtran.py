@@ -212,6 +212,7 @@ def test_modtran_inputs_writes_appendix_a_for_each_point_inside_the_horizon():
     c = cases[3]  # 23 km, 9000 m, 5000 m
     # Appendix A of LeMaster & Eismann (2017): MODEL 2, rural, IMULT 1, IDAY 236, PARM1 90,
     # PARM2 50, GNDALT 0, H2 0, TPTEMP 299, 15 % target, 0.3-14 um by 0.01, FWHM 0.02, ICLD 0
+    # (the spectral grid in nm, the unit of the CSV read_modtran_csv reads)
     assert c["ATMOSPHERE"]["MODEL"] == "ATM_MIDLAT_SUMMER"
     assert c["AEROSOLS"] == {"IHAZE": "AER_RURAL", "ICLD": "CLOUD_NONE", "RAINRT": 0.0,
                              "VIS": 23.0}
@@ -225,8 +226,8 @@ def test_modtran_inputs_writes_appendix_a_for_each_point_inside_the_horizon():
     assert c["SURFACE"] == {"SURFTYPE": "REFL_CONSTANT", "SURREF": 0.15, "TPTEMP": 299.0,
                             "GNDALT": 0.0}
     s = c["SPECTRAL"]
-    assert (s["V1"], s["V2"], s["DV"], s["FWHM"]) == (0.3, 14.0, 0.01, 0.02)
-    assert s["FLAGS"][0] == "M" and s["XFLAG"] == "M"
+    assert (s["V1"], s["V2"], s["DV"], s["FWHM"]) == (300.0, 14000.0, 10.0, 20.0)
+    assert s["FLAGS"][0] == "N" and s["XFLAG"] == "N"
     nadir = cases[2]
     assert nadir["GEOMETRY"]["OBSZEN"] == 180.0 and "BETA" not in nadir["GEOMETRY"]
     assert cases[5]["AEROSOLS"]["VIS"] == 5.0
