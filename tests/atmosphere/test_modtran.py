@@ -212,6 +212,7 @@ def test_modtran_inputs_writes_appendix_a_for_each_point_inside_the_horizon():
     c = cases[3]  # 23 km, 9000 m, 5000 m
     # Appendix A of LeMaster & Eismann (2017): MODEL 2, rural, IMULT 1, IDAY 236, PARM1 90,
     # PARM2 50, GNDALT 0, H2 0, TPTEMP 299, 15 % target, 0.3-14 um by 0.01, FWHM 0.02, ICLD 0
+    # (the spectral grid in nm, the unit of the CSV read_modtran_csv reads)
     assert c["ATMOSPHERE"]["MODEL"] == "ATM_MIDLAT_SUMMER"
     assert c["AEROSOLS"] == {"IHAZE": "AER_RURAL", "ICLD": "CLOUD_NONE", "RAINRT": 0.0,
                              "VIS": 23.0}
@@ -225,8 +226,8 @@ def test_modtran_inputs_writes_appendix_a_for_each_point_inside_the_horizon():
     assert c["SURFACE"] == {"SURFTYPE": "REFL_CONSTANT", "SURREF": 0.15, "TPTEMP": 299.0,
                             "GNDALT": 0.0}
     s = c["SPECTRAL"]
-    assert (s["V1"], s["V2"], s["DV"], s["FWHM"]) == (0.3, 14.0, 0.01, 0.02)
-    assert s["FLAGS"][0] == "M" and s["XFLAG"] == "M"
+    assert (s["V1"], s["V2"], s["DV"], s["FWHM"]) == (300.0, 14000.0, 10.0, 20.0)
+    assert s["FLAGS"][0] == "N" and s["XFLAG"] == "N"
     nadir = cases[2]
     assert nadir["GEOMETRY"]["OBSZEN"] == 180.0 and "BETA" not in nadir["GEOMETRY"]
     assert cases[5]["AEROSOLS"]["VIS"] == 5.0
@@ -503,3 +504,34 @@ def test_tables_from_runs_takes_csv_runs_placed_by_hand(tmp_path):
     cube = atm.tables_from_runs([rad], visibility=[23.0], altitude=[1000.0], ground_range=[0.0])
     assert "modtran_los_index" not in rad.attrs
     np.testing.assert_array_equal(cube.values[0, 0, 0, 3], rad.SOL_SCAT.values)
+
+
+def test_read_modtran_csv_reads_back_the_csv_modtran_inputs_asks_for(tmp_path):
+    # A case of modtran_inputs asks for a CSVPRNT file; the file MODTRAN 6 writes for it must
+    # be one read_modtran_csv reads. The only CSVPRNT spectral column seen in a public file is
+    # 'Waveln' over '[nm]', written for cases with SPECTRAL.FLAGS[0] 'N' and XFLAG 'N'
+    # (brandon-reade/Qrackling, Python/example.json: FLAGS 'NGAA  F', XFLAG 'N'), whose
+    # radiances are micro-W sr-1 cm-2 nm-1 (a nanometre .7sc's, WTHEAD's XFLAG comment).
+    grid = {"altitude": 9000.0, "ground_range": 0.0, "visibility": 23.0}
+    (entry,) = atm.modtran_inputs(grid)["MODTRAN"]
+    s = entry["MODTRANINPUT"]["SPECTRAL"]
+    assert (s["FLAGS"][0], s["XFLAG"]) == ("N", "N"), (
+        f"modtran_inputs asks for a CSV in FLAGS {s['FLAGS'][0]!r} / XFLAG {s['XFLAG']!r} units; "
+        "read_modtran_csv reads only the 'Waveln [nm]' column of FLAGS 'N' / XFLAG 'N' cases")
+    # the rows MODTRAN would print on the case's grid, V1 to V2 by DV in nm (made-up values:
+    # radiance terms rising with the row number, as micro-W sr-1 cm-2 nm-1)
+    nm = s["V1"] + s["DV"] * np.arange(round((s["V2"] - s["V1"]) / s["DV"]) + 1)
+    k = np.arange(nm.size)
+    rows = [(f"{x:g}", 0.5, 1e-6 * (i + 1), 2e-7, 3e-6, 0.04, 0.06, 0.02, 0.015)
+            for i, x in zip(k, nm, strict=True)]
+    (run,) = atm.read_modtran_csv(_radiance_csv(tmp_path / "xbsm_scan.csv", rows))
+    # Appendix A's grid, 0.3-14 um by 0.01 um, in metres and ascending
+    assert run.sizes["wavelength"] == 1371
+    np.testing.assert_allclose(run.wavelength.values, np.linspace(0.3e-6, 14e-6, 1371),
+                               rtol=1e-12)
+    assert np.all(np.diff(run.wavelength.values) > 0)
+    # micro-W sr-1 cm-2 nm-1 -> the database's W sr-1 cm-2 um-1: times 1e-3
+    np.testing.assert_allclose(run.PTH_THRML.values, (1e-6 * (k + 1) + 2e-7) * 1e-3,
+                               rtol=1e-12)
+    assert run.PTH_THRML.attrs["units"] == "W sr-1 cm-2 um-1"
+    assert run.attrs["modtran_spectral_column"] == "Waveln [nm]"

@@ -10,7 +10,8 @@ runs of the same shape (a CSV has no card echo: the run's place is given by hand
 :func:`tables_from_runs` places runs on the (visibility, altitude, ground range) grid as the
 DataArray :func:`~xbsm.atmosphere.tables.from_tables` takes.
 :func:`modtran_inputs` writes the MODTRAN 6 JSON cases that would compute a cube on a grid,
-with the settings of Appendix A of the pyBSM paper (the shipped database's) as defaults.
+with the settings of Appendix A of the pyBSM paper (the shipped database's) as defaults, on
+the nanometre grid whose CSV output :func:`read_modtran_csv` reads back.
 
 Where each format fact comes from (nothing here is guessed from the outputs alone):
 
@@ -388,7 +389,8 @@ _CSV_COUNT = re.compile(r"^(los index|num freq|num column)\s*,\s*(\d+)$")
 #: ``-nan(ind)`` of a Windows build (seen in public CSVPRNT files).
 _CSV_NONFINITE = re.compile(r"^([-+]?)(nan|inf|infinity)(\(\w*\))?$", re.IGNORECASE)
 #: Spectral column of a CSVPRNT block -> its unit. Only the scanned file's nanometre grid
-#: (``<CSVPRNT>_scan.csv`` of a run with XFLAG N) has been seen in a public file.
+#: (``<CSVPRNT>_scan.csv`` of a run with XFLAG N) has been seen in a public file; it is the
+#: grid :data:`APPENDIX_A` (so :func:`modtran_inputs`) asks for.
 _CSV_SPECTRAL = {"Waveln [nm]": "nm"}
 #: Database component -> the CSV columns summed into it. Transmittance runs (IEMSCT 0):
 #: ``combin trans``. Radiance runs: MODTRAN 6 prints the thermal scatter and the single
@@ -542,7 +544,8 @@ def read_modtran_csv(path) -> list[xr.Dataset]:
     ----------
     path : str or os.PathLike
         A ``<CSVPRNT>_scan.csv`` on a nanometre grid (XFLAG N): the only spectral column
-        seen in a public file, ``Waveln [nm]``. Another spectral column is refused.
+        seen in a public file, ``Waveln [nm]``, and the one the cases of
+        :func:`modtran_inputs` ask for. Another spectral column is refused.
 
     Returns
     -------
@@ -814,10 +817,14 @@ APPENDIX_A = {
         "GNDALT": 0.0,  # ground altitude, km MSL
     },
     "SPECTRAL": {
-        # 0.3-14 um by 0.01 um with a 0.02 um slit: FLAGS(1) = 'M' (micrometres), XFLAG 'M'
-        # (per-micron radiance in the .7sc: WTHEAD's XFLAG comment); YFLAG 'R' radiance.
-        "V1": 0.3, "V2": 14.0, "DV": 0.01, "FWHM": 0.02,
-        "YFLAG": "R", "XFLAG": "M", "FLAGS": "MT A   ",
+        # 0.3-14 um by 0.01 um with a 0.02 um slit, written in nanometres (300-14000 nm by
+        # 10 nm, FWHM 20 nm): FLAGS(1) = 'N', XFLAG 'N' (micro-W sr-1 cm-2 / nm: WTHEAD's
+        # XFLAG comment). The only CSVPRNT spectral column seen in a public file is
+        # 'Waveln [nm]', from cases with FLAGS 'N' and XFLAG 'N' (brandon-reade/Qrackling,
+        # Python/example.json), so the CSV these cases ask for is one read_modtran_csv
+        # reads; their .7sc is then WAVLEN(NM), which read_tape7 reads. YFLAG 'R' radiance.
+        "V1": 300.0, "V2": 14000.0, "DV": 10.0, "FWHM": 20.0,
+        "YFLAG": "R", "XFLAG": "N", "FLAGS": "NT A   ",
     },
 }
 #: Settings of Appendix A that MODTRAN 6's JSON cannot take as written there: the background
@@ -881,10 +888,12 @@ def modtran_inputs(grid, conditions=None, *, directory=None, multi_case=True) ->
     settings of Appendix A of LeMaster & Eismann (2017) (:data:`APPENDIX_A`: mid-latitude
     summer, rural aerosol, sun 50 deg from zenith and 90 deg in azimuth from the line of
     sight, day 236, target at 299 K with 15 % reflectance on the ground at sea level,
-    0.3-14 um by 0.01 um, slit 0.02 um) unless ``conditions`` says otherwise. Each case
-    asks for a CSV and a JSON spectral output (``FILEOPTIONS``); the legacy tape7 and
-    ``.7sc`` files, which :func:`read_tape7` reads back, are MODTRAN's to write unless
-    ``FILEOPTIONS`` turns them off.
+    0.3-14 um by 0.01 um, slit 0.02 um, written as 300-14000 nm by 10 nm, FWHM 20 nm)
+    unless ``conditions`` says otherwise. Each case asks for a CSV and a JSON spectral
+    output (``FILEOPTIONS``); the CSV, on the nanometre grid, is what
+    :func:`read_modtran_csv` reads back; the legacy tape7 and ``.7sc`` files, which
+    :func:`read_tape7` reads back, are MODTRAN's to write unless ``FILEOPTIONS`` turns
+    them off.
 
     Parameters
     ----------
