@@ -80,6 +80,26 @@ def test_drift_on_the_slices_is_the_two_axis_kernel_on_them_to_the_bit():
                                                                           slices.shape[:-1]))
 
 
+@pytest.mark.parametrize("layout", ["scenarios first", "frequency first", "two sweep axes"])
+def test_drift_evaluated_once_per_distinct_value_is_the_same_to_the_bit(layout):
+    # a sweep's scenarios share few exposures: their sincs are evaluated once per value
+    # and gathered; each scenario alone (a scalar drift, evaluated directly) is the check
+    rng = np.random.default_rng(11)
+    f = np.concatenate([[0.0], rng.uniform(0.0, 2e6, 120)])
+    values = np.array([0.0, -0.0, 1e-6, -1e-6, 3.3e-6, 5e-7, np.nan])
+    drift_x, fx = {
+        "scenarios first": (rng.choice(values, (500, 1)), f),
+        "frequency first": (rng.choice(values, (1, 400)), f[:, None]),
+        "two sweep axes": (rng.choice(values, (30, 1, 20)), f[:, None])}[layout]
+    out = drift_kernel(drift_x, fx, 0.0, 0.0)
+    assert out.shape == np.broadcast_shapes(drift_x.shape, fx.shape)
+    for index in np.ndindex(drift_x.shape):
+        alone = drift_kernel(drift_x[index], fx, 0.0, 0.0)  # scalar: evaluated directly
+        got = out[tuple(i if n > 1 else slice(None) for i, n in zip(index, drift_x.shape,
+                                                                    strict=True))]
+        np.testing.assert_array_equal(got, alone.reshape(got.shape))
+
+
 def test_dask_stays_lazy():
     fx, fy = polar(np.linspace(0, 1e6, 20))
     lazy = (fx.chunk(5), fy.chunk(5))
