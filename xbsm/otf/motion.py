@@ -110,12 +110,13 @@ def _drift_sinc(drift, frequency):
 def _sinc_by_value(drift, frequency):
     """sinc(drift frequency), evaluated once per distinct drift value where drift repeats.
 
-    A sweep's scenarios mostly share their exposure (a ground-range or visibility sweep:
-    one value; a study chunk over drift rates: one per rate), so its drift OTF is a few
-    rows of sincs, gathered: the same values (the same products, elementwise), 15x faster
-    on 50,000 scenarios x 195 nodes with 4 distinct drifts. Evaluated directly where the
-    frequencies vary along the drift's own axes (each scenario its own nodes) or where
-    fewer than 4 scenarios share a value on average.
+    Many sweeps' scenarios share their exposure (a study chunk over drift rates: one per
+    rate, unless the well fills), so their drift OTF is a few rows of sincs, gathered: the
+    same values (the same products, elementwise), 15x faster on 50,000 scenarios x 195
+    nodes with 4 distinct drifts. Evaluated directly where the frequencies vary along the
+    drift's own axes (each scenario its own nodes) or where fewer than 4 scenarios share a
+    value on average (a ground-range sweep whose well-fill limit gives each range its own
+    exposure).
     """
     shape = np.broadcast_shapes(drift.shape, frequency.shape)
     d = drift.reshape((1,) * (len(shape) - drift.ndim) + drift.shape)

@@ -147,4 +147,4 @@ class OutputLock:
                 self.path.unlink(missing_ok=True)  # while still holding it (see the module)
             finally:
                 os.close(self.fd)
-            self.fd = None
+                self.fd = None
