@@ -123,9 +123,9 @@ def open_dataset(path):
     ``file_cache_maxsize=4`` (standing for a process with more than 128 files open),
     0 of 10 with this. Here every open of a file shares one cache key (path and stamp,
     not a new id), so the process holds one handle of the file however many datasets
-    read it, plus at most one :func:`netcdf_file` (or ``check_supported``'s dataset) of
-    the thread holding the lock: two at once, which crashed in none of the orders of
-    opens and closes tried. The file manager also takes :data:`LOCK`, so closing the
+    read it (``check_supported`` included), plus at most one :func:`netcdf_file` of the
+    thread holding the lock: two at once, which crashed in none of the orders of opens
+    and closes tried. The file manager also takes :data:`LOCK`, so closing the
     handle when the last dataset is garbage collected happens under it too: xarray
     2023.12 gave each manager a lock of its own, and 38 of 82 closes in that stress ran
     outside :data:`LOCK` (0 with this).
