@@ -34,8 +34,9 @@ def test_polychromatic_kernel_of_one_wavelength_is_the_wind_blended_closed_form(
     np.testing.assert_allclose(out, w * short + (1 - w) * long, rtol=1e-14, atol=1e-16)
 
 
-@pytest.mark.parametrize("block", [1, 7, 64, 1 << 16])
-def test_polychromatic_kernel_does_not_depend_on_its_blocks(monkeypatch, block):
+@pytest.mark.parametrize(("block", "step"), [(1, None), (7, None), (64, None),
+                                           (1 << 16, None), (1 << 16, 1), (1 << 16, 4)])
+def test_polychromatic_kernel_does_not_depend_on_its_blocks(monkeypatch, block, step):
     # reference: the weighted sum written out one wavelength at a time, in band order
     rng = np.random.default_rng(3)
     radial = rng.uniform(0.0, 4e5, (5, 1))
@@ -48,6 +49,8 @@ def test_polychromatic_kernel_does_not_depend_on_its_blocks(monkeypatch, block):
         expected += norm[:, i] * turbulence._wind_blended_kernel(
             radial, lam, d, turbulence._scale_kernel(r0_ref, lam, 1e-6), t, v)
     monkeypatch.setattr(turbulence, "_BLOCK", block)
+    if step is not None:  # wavelengths a step over the one block of 55 values: 4 + 2 for 4
+        monkeypatch.setattr(turbulence, "_STEP", 55 * step)
     out = turbulence.polychromatic_kernel(radial, r0_ref, t, v, d, 1e-6, wl, weights)
     # a few ulp: numpy's vector and scalar loops of pow and exp may round differently
     # (1.5e-15 seen with numpy 1.24), and the kernel takes the frequency's powers apart from
