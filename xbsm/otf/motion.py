@@ -93,16 +93,24 @@ def drift_slices_kernel(drift_x, drift_y, frequency):
     fy with half its sincs (each scenario of an integration-time or drift sweep has its
     own).
     """
-    along_x, along_y = _drift_sinc(drift_x, frequency), _drift_sinc(drift_y, frequency)
-    out = np.empty(np.broadcast_shapes(np.shape(along_x), np.shape(along_y)) + (2,))
-    out[..., 0] = along_x
-    out[..., 1] = along_y
-    return out
+    # orientation-major in memory (a view with the orientation last): each slice written
+    # whole, and the product of the OTF factors runs along the nodes (with the orientation
+    # innermost, every factor that does not have it made numpy's loops two values long)
+    out = np.empty((2,) + np.broadcast_shapes(np.shape(drift_x), np.shape(drift_y),
+                                              np.shape(frequency)))
+    for slice_, drift in zip(out, (drift_x, drift_y), strict=True):
+        slice_[...] = 1.0 if _still(drift) else _drift_sinc(drift, frequency)
+    return np.moveaxis(out, 0, -1)
+
+
+def _still(drift) -> bool:
+    """Whether an array of drifts is all 0 (a still camera): its sinc is 1, unevaluated."""
+    return bool(np.ndim(drift)) and not np.any(drift)
 
 
 def _drift_sinc(drift, frequency):
-    """sinc(drift f); without drift (every value 0, a still camera) the 1 it is, unevaluated."""
-    if np.ndim(drift) and not np.any(drift):  # (an optics study: 25,000 scenarios' sincs of 0)
+    """sinc(drift f); without drift (:func:`_still`) the 1 it is, unevaluated."""
+    if _still(drift):  # (an optics study: 25,000 scenarios' sincs of 0)
         return np.ones(np.broadcast_shapes(np.shape(drift), np.shape(frequency)))
     return _sinc_by_value(np.asarray(drift, dtype=float), np.asarray(frequency, dtype=float))
 
