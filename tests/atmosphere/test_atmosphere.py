@@ -21,6 +21,7 @@ from scipy.integrate import quad
 import xbsm
 from xbsm import _chain, geometry
 from xbsm import atmosphere as atm
+from xbsm.atmosphere._cubic import cubic_increment  # the cubic itself, tested here
 from xbsm.atmosphere._profile import profile_of  # the profile itself, tested here
 from xbsm.examples import olson_scenario, olson_sensor
 from xbsm.flags import FLAGS, has_flag
@@ -399,6 +400,25 @@ def test_extinction_profile_at_nadir_is_the_profile_integral(db, altitude, visib
     np.testing.assert_allclose(out["transmission"].values,
                                [np.exp(-(depth[0] + fraction * (depth[1] - depth[0])))],
                                rtol=1e-12)
+
+
+def test_cubic_increment_where_every_outer_node_is_usable_is_the_general_rule():
+    # with every outer node usable the cubic takes the interior slopes alone; the general
+    # rule (a choice per entry, here with one entry's outer nodes unusable) gives every
+    # other entry the same bits, and the unusable entry its secant slopes
+    rng = np.random.default_rng(11)
+    x = np.cumsum(rng.uniform(0.1, 1.0, (4, 50)), axis=0)
+    y = np.cumsum(rng.uniform(-0.3, 1.0, (4, 50)), axis=0)  # some secants change sign
+    t = rng.uniform(0.0, 1.0, 50)
+    usable = np.ones(50, dtype=bool)
+    some = usable.copy()
+    some[0] = False
+    shortcut = cubic_increment(y, x, t, usable, usable)
+    general = cubic_increment(y, x, t, some, some)
+    np.testing.assert_array_equal(shortcut[1:], general[1:])
+    # closed form of the secant-slope Hermite step: linear in t, (y2 - y1) t
+    np.testing.assert_allclose(general[0], (y[2, 0] - y[1, 0]) * t[0], rtol=1e-14)
+    assert shortcut[0] != general[0]
 
 
 def test_extinction_profile_factor_shared_across_ground_ranges_equals_each_its_own(db):

@@ -43,10 +43,14 @@ def cubic_increment(y, x, t, left, right):
     h0, h1, h2 = x[1] - x[0], x[2] - x[1], x[3] - x[2]
     rise = y[2] - y[1]
     s0, s1, s2 = (y[1] - y[0]) / h0, rise / h1, (y[3] - y[2]) / h2
-    d1 = np.where(left, pchip_interior_slope(h0, h1, s0, s1),
-                  np.where(right, pchip_end_slope(h1, h2, s1, s2), s1))
-    d2 = np.where(right, pchip_interior_slope(h1, h2, s1, s2),
-                  np.where(left, pchip_end_slope(h1, h0, s1, s0), s1))
+    if np.all(left) and np.all(right):  # every outer node usable (the common case): the
+        # interior slopes, without the one-sided ones that would be selected away
+        d1, d2 = pchip_interior_slope(h0, h1, s0, s1), pchip_interior_slope(h1, h2, s1, s2)
+    else:
+        d1 = np.where(left, pchip_interior_slope(h0, h1, s0, s1),
+                      np.where(right, pchip_end_slope(h1, h2, s1, s2), s1))
+        d2 = np.where(right, pchip_interior_slope(h1, h2, s1, s2),
+                      np.where(left, pchip_end_slope(h1, h0, s1, s0), s1))
     t2, t3 = t * t, t * t * t
     return (t3 - 2.0 * t2 + t) * h1 * d1 + (-2.0 * t3 + 3.0 * t2) * rise + (t3 - t2) * h1 * d2
 

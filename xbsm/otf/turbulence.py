@@ -676,8 +676,8 @@ def _sums_by_wavelength(exponent, radial_5_3, tilt, shares, block):
     n_wavelengths = exponent.shape[0]
     step = min(n_wavelengths, max(1, _STEP // max(1, sums[0].size)))
     # one buffer of each temporary for every step, not new ones (a fifth of the time of a
-    # sweep's 31 steps of 30,000 values went to allocating and first touching them)
-    # (the exponentials' own shape: size 1 along the axes where only the weights vary)
+    # sweep's 31 steps of 30,000 values went to allocating and first touching them); the
+    # exponentials' in their own shape, size 1 along the axes where only the weights vary
     own = np.broadcast_shapes(exponent.shape[1:], radial_5_3.shape[1:], tilt.shape[1:])
     short_buffer, terms_buffer = np.empty((step,) + own), np.empty((step, 2) + block)
     for start in range(0, n_wavelengths, step):
