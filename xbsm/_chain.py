@@ -631,7 +631,10 @@ class Direct:
                                               fl.flag_attrs(flags))
             else:
                 o = _DECLARED[name]
-                variables[name] = xr.Variable(o.dims, np.asarray(value, dtype=float), o.attrs())
+                # fastpath: the float64 array as it is (xarray's own constructors pass it
+                # so; its checks cost a twentieth of a single call's labelling)
+                variables[name] = xr.Variable(o.dims, np.asarray(value, dtype=float), o.attrs(),
+                                              fastpath=True)
         coords = {}
         if "spectral_weights" in variables:
             coords["wavelength"] = xr.Variable("wavelength", atm["wavelength"],
