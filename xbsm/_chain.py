@@ -632,7 +632,7 @@ class Direct:
             else:
                 o = _DECLARED[name]
                 # fastpath: the float64 array as it is (xarray's own constructors pass it
-                # so; its checks cost a twentieth of a single call's labelling)
+                # so); its checks were 3.5 % of a single snr call's instructions
                 variables[name] = xr.Variable(o.dims, np.asarray(value, dtype=float), o.attrs(),
                                               fastpath=True)
         coords = {}
