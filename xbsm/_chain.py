@@ -61,10 +61,12 @@ _DECLARED = {**radiometry.SIGNAL_OUTPUTS, **noise.OUTPUTS, **radiometry.SENSITIV
 # ---- the composition ---------------------------------------------------------------
 
 def _snr_chain(ap, m, targets: str, *, sensitivity: bool = False):
-    """The SNR chain: its result's variables, the band atmosphere and the optics limits.
+    """The SNR chain: its result's variables, the band atmosphere and the sensor's band terms.
 
-    The optics limits (:data:`quadrature.CUTOFF_OUTPUTS`): the cutoff D / lambda_min and the
-    band's wavelength ratio, where the aperture OTF ends and has its kinks.
+    The band terms (:data:`radiometry.BAND_OUTPUTS`) give the chains that evaluate OTFs
+    their optics limits (the applier's ``optics_limits``: the cutoff D / lambda_min and the
+    band's wavelength ratio, where the aperture OTF ends and has its kinks); the SNR alone
+    does not need them.
 
     ``sensitivity``: also the target's NETD, NER and NEI (the noise over the temperature
     derivative of its signal).
@@ -73,7 +75,6 @@ def _snr_chain(ap, m, targets: str, *, sensitivity: bool = False):
     radiances = ap.radiances(atm, targets, m)
     band = ap.sensor_band(atm, m)
     signal = ap.signal(atm, band, radiances, m)
-    optics = ap.optics_limits(atm, band)
     noise_ = ap.noise(signal)
     brighter = np.maximum(signal["target_photoelectrons"], signal["background_photoelectrons"])
     flags = ap.flag(atm["flags"], "well_fill_limited", signal["well_fill_scale"] < 1.0)
@@ -92,14 +93,14 @@ def _snr_chain(ap, m, targets: str, *, sensitivity: bool = False):
     }
     if sensitivity:
         values.update(ap.sensitivity(atm, band, signal, noise_["total_noise"], m))
-    return values, atm, optics
+    return values, atm, band
 
 
 def _niirs_chain(ap, m, calibration, targets: str = "giqe") -> dict:
     """The NIIRS chain: the SNR chain, the viewing geometry, the edge terms, the GIQE."""
-    r, atm, optics = _snr_chain(ap, m, targets)
+    r, atm, band = _snr_chain(ap, m, targets)
     view = ap.view(m)
-    edges = _edge_chain(ap, r, atm, optics, view, m)
+    edges = _edge_chain(ap, r, atm, ap.optics_limits(atm, band), view, m)
     s = ap.sensor
     metrics = ap.giqe(
         rer=edges["rer"], eho=edges["eho"], rer_x=edges["rer_unfiltered_x"],
@@ -294,7 +295,8 @@ def system_otf(sensor: xr.Dataset, scenario: xr.Dataset, m, frequency, fy) -> xr
     ``frequency`` None: 201 points from 0 to the optics cutoff D / lambda_min.
     """
     ap = Labelled(sensor, scenario)
-    r, atm, optics = _snr_chain(ap, m, "giqe")
+    r, atm, band = _snr_chain(ap, m, "giqe")
+    optics = ap.optics_limits(atm, band)
     if frequency is None:
         frequency = np.linspace(0.0, float(optics["cutoff_frequency"].max()), 201)
     frequency = params.frequencies("frequency", params.labelled("frequency", frequency,
