@@ -127,8 +127,33 @@ def dataset_of(variables: dict, coords: dict, attrs: dict) -> xr.Dataset:
         return xr.Dataset(variables, coords=coords, attrs=attrs)
     every, indexes, dims = dict(variables), {}, {}
     for name, coord in coords.items():
-        indexes[name] = PandasIndex.from_variables({name: coord}, options={})
+        indexes[name] = _index_of(name, coord)
         every.update(indexes[name].create_variables({name: coord}))
     for variable in every.values():
         dims.update(zip(variable.dims, variable.shape, strict=True))
     return construct(every, set(coords), dims, attrs, indexes)
+
+
+def _index_of(name: str, coord: xr.Variable) -> PandasIndex:
+    """The index of a 1-D dimension coordinate, the same object for the same values.
+
+    Building a pandas index costs about 65 us, as much as a tenth of a single ``snr``
+    call, and one scenario's results repeat their coordinates (the band's wavelengths, the
+    GIQE versions). An index is immutable (xarray shares it between a Dataset and its
+    shallow copies), so results may share it; the coordinate variables themselves, whose
+    attributes a user may edit, stay each result's own.
+    """
+    key = (name, coord.dims, coord.dtype.str, coord.values.tobytes())
+    index = _INDEXES.get(key)
+    if index is None:
+        if len(_INDEXES) >= _MAX_INDEXES:
+            _INDEXES.clear()
+        index = _INDEXES[key] = PandasIndex.from_variables({name: coord}, options={})
+    return index
+
+
+_INDEXES: dict[tuple, PandasIndex] = {}
+""":func:`_index_of`'s indexes by coordinate name, dims, dtype and values."""
+_MAX_INDEXES = 256
+"""Most indexes :data:`_INDEXES` holds (a sweep of bands makes a new one each call)."""
+
