@@ -179,6 +179,8 @@ NOT_LABELLED = MappingProxyType({
     **{f"xbsm.geometry.{name}": "a kernel: plain numpy arrays in and out, composed by "
        "xbsm.atmosphere (labelled by viewing_geometry and ground_range_at_elevation)"
        for name in ("slant_and_elevation_kernel", "ground_range_at_elevation_kernel")},
+    "xbsm.geometry.altitude_along_path_kernel": "a kernel: plain numpy arrays in and out, "
+    "composed by xbsm.otf.turbulence's slant-path r0 (labelled by altitude_along_path)",
     "xbsm.radiometry.is_emissive_band": "returns a bool",
     "xbsm.noise.noise_inputs": "returns the arguments of noise_arrays, as given",
     **{f"xbsm.radiometry.{name}_inputs": f"returns the arguments of {name}_arrays, as given"

@@ -129,8 +129,13 @@ def ground_range_at_elevation_kernel(sin_elevation, cos_elevation, sensor_altitu
                                      EARTH_RADIUS + slant * sin_elevation)
 
 
-def _altitude_along_path_kernel(sensor_altitude, slant_range, distance_from_target,
-                                target_altitude, form):
+def altitude_along_path_kernel(sensor_altitude, slant_range, distance_from_target,
+                               target_altitude, form):
+    """Height above the Earth at a point on the line of sight (numpy kernel).
+
+    :func:`altitude_along_path` on plain arrays (the slant-path r0's kernel calls it);
+    ``form`` one of :data:`FORMS`. [m]
+    """
     with np.errstate(all="ignore"):
         a = EARTH_RADIUS + sensor_altitude
         phi = _nadir_angle_kernel(slant_range, sensor_altitude, target_altitude, form)
@@ -310,7 +315,7 @@ def altitude_along_path(distance_from_target, slant_range, sensor_altitude, targ
     in its nadir angle). A slant range shorter than the height difference is
     NaN (:func:`nadir_angle`).
     """
-    out = apply_kernel(_altitude_along_path_kernel, sensor_altitude, slant_range,
+    out = apply_kernel(altitude_along_path_kernel, sensor_altitude, slant_range,
                        distance_from_target, target_altitude, form=form)
     return out
 

@@ -9,7 +9,7 @@ import numpy as np
 
 from .._kernels import apply_kernel
 from .._metadata import described
-from ..geometry import altitude_along_path
+from ..geometry import altitude_along_path_kernel
 from ..params import Spec, Values, cn2_table, contract, table_values
 from ..quadrature import legendre_nodes
 from ._contracts import (
@@ -297,9 +297,9 @@ def slant_path_kernel(wavelength, high_altitude_wind_speed, slant_range, sensor_
     def on_path(a):
         return np.asarray(a, dtype=float)[None, ...]
 
-    # geometry on plain ndarrays: xbsm.geometry clips with np.clip, which is not a ufunc
-    heights = altitude_along_path(t[along] * slant_range, on_path(slant_range),
-                                  on_path(sensor_altitude), on_path(target_altitude), form=form)
+    heights = altitude_along_path_kernel(on_path(sensor_altitude), on_path(slant_range),
+                                         t[along] * slant_range, on_path(target_altitude),
+                                         form)
     if profile is None:
         cn2 = _hufnagel_valley_kernel(on_path(high_altitude_wind_speed), heights,
                                       on_path(cn2_at_1m), on_path(cn2_tropopause),
