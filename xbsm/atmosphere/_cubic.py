@@ -55,6 +55,12 @@ def cubic_increment(y, x, t, left, right):
     return (t3 - 2.0 * t2 + t) * h1 * d1 + (-2.0 * t3 + 3.0 * t2) * rise + (t3 - t2) * h1 * d2
 
 
+#: Which of the components along the path (``_sight.ALONG_PATH``: TRANS, SURF_EMIS,
+#: GRND_RFLT) is TRANS, on (component, wavelength) axes.
+_TRANS_FIRST = np.array([True, False, False])[:, None]
+_TRANS_FIRST.flags.writeable = False
+
+
 @np.errstate(divide="ignore", invalid="ignore", over="ignore")
 def optical_depth_cubic(base, low, high, beyond, sight, on_node, scale=None):
     """The cubic rules' values of TRANS, SURF_EMIS, GRND_RFLT (numpy kernel).
@@ -75,10 +81,8 @@ def optical_depth_cubic(base, low, high, beyond, sight, on_node, scale=None):
     """
     usable = sight.outer
     ground = usable[:, 2, None, None]
-    along_trans = np.zeros(base.shape[1:], dtype=bool)
-    along_trans[0] = True  # TRANS is the first of _sight.ALONG_PATH
-    y0 = np.where(ground & along_trans, 0.0, beyond[0])
-    left = np.where(along_trans, usable[:, 0, None, None] | ground,
+    y0 = np.where(ground & _TRANS_FIRST, 0.0, beyond[0])
+    left = np.where(_TRANS_FIRST, usable[:, 0, None, None] | ground,
                     usable[:, 0, None, None]) & np.isfinite(y0)
     right = usable[:, 1, None, None] & np.isfinite(beyond[1])
     step = cubic_increment((y0, np.log(low), np.log(high), beyond[1]),

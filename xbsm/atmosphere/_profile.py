@@ -46,15 +46,23 @@ class ExtinctionProfile(NamedTuple):
         return self._replace(**{f: getattr(self, f)[..., window] for f in self._fields[1:]})
 
 
-#: Database -> its profile, for as long as the database lives (a database is immutable).
+#: Database -> its profile and the windows taken of it, for as long as the database lives
+#: (a database is immutable).
 _PROFILES = weakref.WeakKeyDictionary()
 
 
-def profile_of(db) -> ExtinctionProfile:
-    """The extinction profile of ``db`` (computed once per database)."""
-    profile = _PROFILES.get(db)
+def profile_of(db, window=slice(None)) -> ExtinctionProfile:
+    """The extinction profile of ``db`` at the wavelengths ``window`` (a slice).
+
+    Computed once per database, each window once (a model call takes its band's).
+    """
+    held = _PROFILES.get(db)
+    if held is None:
+        held = _PROFILES.setdefault(db, {None: extinction_profile(db)})
+    key = (window.start, window.stop, window.step)
+    profile = held.get(key)
     if profile is None:
-        profile = _PROFILES.setdefault(db, extinction_profile(db))
+        profile = held.setdefault(key, held[None].window(window))
     return profile
 
 

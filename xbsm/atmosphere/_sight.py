@@ -117,32 +117,36 @@ def along_sight(altitude, ground_range, vis, alt, db, rule):
     if cubic:
         heights += [np.where(ground, 0.0, node[:, 2]), node[:, 3]]
     heights = np.stack(heights, axis=1)
-    x, weight = _optical_path_nodes(heights, sin_e, a0 == a1)
+    # along the line of sight and, for the extinction profile, straight up (one call)
+    sines = np.stack((sin_e, np.ones_like(sin_e))) if rule.profile else sin_e[None]
+    x, weight = _optical_path_nodes(heights, sines, a0 == a1)
     if not cubic:
-        return Sight((a, g0, g1, wg), weight, usable, None, None, None)
+        return Sight((a, g0, g1, wg), weight[0], usable, None, None, None)
     exists = (~ground, (index[:, 3] <= top) & (node[:, 3] <= ALTITUDE_GAP[0]))
     outer = np.stack((exists[0] & covered[:, 2], exists[1] & covered[:, 3], ground), axis=1)
     nadir = None
     if rule.profile:
-        x_up, weight_up = _optical_path_nodes(heights, np.ones_like(sin_e), a0 == a1)
+        x_up, weight_up = x[1], weight[1]
         with np.errstate(divide="ignore", invalid="ignore"):  # 0 / 0 on a node
             position = np.where(a0 == a1, 0.0,
                                 (altitude - node[:, 0]) / (node[:, 1] - node[:, 0]))
         nadir = Nadir(x_up, weight_up, np.stack((*exists, ground), axis=1), position)
-    return Sight((a, g0, g1, wg), weight, usable, outer, x, nadir)
+    return Sight((a, g0, g1, wg), weight[0], usable, outer, x[0], nadir)
 
 
-def _optical_path_nodes(heights, sin_e, on_node):
+def _optical_path_nodes(heights, sines, on_node):
     """Optical-path coordinate of the cubic's nodes and the scenario's weight in it.
 
     ``heights`` (scenario, 3 or 5): lower bracket, the scenario, upper bracket (, the
-    node below, the node above). Returns the coordinate (scenario, 4) of below, lower,
-    upper, above (None with three heights) and the weight (0 on a node).
+    node below, the node above); ``sines`` (..., scenario, 1) the sines of the elevation
+    angles to take them at. Returns the coordinate (..., scenario, 4) of below, lower,
+    upper, above (None with three heights) and the weight (..., scenario) (0 on a node).
     """
-    path = optical_path_above(heights, sin_e)
+    path = optical_path_above(heights, sines)
     with np.errstate(divide="ignore", invalid="ignore"):
-        weight = np.where(on_node, 0.0, (path[:, 0] - path[:, 1]) / (path[:, 0] - path[:, 2]))
-    x = -path[:, [3, 0, 2, 4]] if heights.shape[1] == 5 else None
+        weight = np.where(on_node, 0.0,
+                          (path[..., 0] - path[..., 1]) / (path[..., 0] - path[..., 2]))
+    x = -path[..., [3, 0, 2, 4]] if heights.shape[1] == 5 else None
     return x, weight
 
 
@@ -157,15 +161,14 @@ def line_of_sight(cube, vis, sight, fixed_range, profile=None):
     taken where the line of sight leaves a table.
     """
     a, g0, g1, wg = (t.T for t in sight.tables)  # (table, scenario)
+    # every table at both ground ranges in one gather each: the brackets, then the outer
+    near, far = (gather(cube, vis, a, g, ALONG_PATH) for g in (g0, g1))
     brackets = slice(0, 2)
-    low, high = interpolate(gather(cube, vis, a[brackets], g0[brackets], ALONG_PATH),
-                            gather(cube, vis, a[brackets], g1[brackets], ALONG_PATH),
-                            wg[brackets], "log")
+    low, high = interpolate(near[brackets], far[brackets], wg[brackets], "log")
     out = interpolate(low, high, sight.weight, "log")
     if sight.x is not None:
         outer = slice(2, 4)
-        beyond = ln_interpolate(gather(cube, vis, a[outer], g0[outer], ALONG_PATH),
-                                gather(cube, vis, a[outer], g1[outer], ALONG_PATH), wg[outer])
+        beyond = ln_interpolate(near[outer], far[outer], wg[outer])
         scale = None if sight.nadir is None else profile_scale(vis, a, sight.nadir, profile)
         out = optical_depth_cubic(out, low, high, beyond, sight, a[0] == a[1], scale)
     fallback = ~sight.usable

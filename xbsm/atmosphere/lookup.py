@@ -361,7 +361,7 @@ def _located_spectra(db, located, rule, window):
     """Flat spectra (scenario, component, wavelength) at located scenarios (numpy)."""
     _, vis, alt, gr, _, along = located
     cube = db.cube[..., window]
-    profile = profile_of(db).window(window) if rule.profile else None
+    profile = profile_of(db, window) if rule.profile else None
     n_comp, n_wl = cube.shape[-2:]
     out = np.empty((vis.size, n_comp, n_wl), dtype=np.float64)
     step = max(1, _BLOCK // max(1, n_comp * n_wl))
