@@ -159,6 +159,8 @@ class Method:
     def overrides(self) -> dict:
         """Knobs that differ from the preset of the same name (every knob if none has it)."""
         base = PRESETS.get(self.name)
+        if base is self:  # a preset itself (every model call's default): nothing to compare
+            return {}
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
                 if f.name != "name" and (base is None or getattr(self, f.name) != getattr(
                     base, f.name))}
