@@ -353,10 +353,33 @@ def _flags_kernel(*arrays, tests, versions):
     ``versions`` is None for one result, else the number of versions along a new last axis.
     """
     bits = [np.int32(0)] * (versions or 1)
+
+    def tested(index, column):
+        return arrays[index] if column is None else arrays[index][..., column]
+
+    # the tests of a value (not over orientations) all at once, on the values broadcast
+    # together along a new first axis: a test at a time cost six small numpy calls (22
+    # tests: about 150 us of a single niirs call)
+    plain = [t for t in tests if t[2] != "any_outside"]
+    if plain:
+        values = np.stack(np.broadcast_arrays(*(tested(*t[5:]) for t in plain)))
+        along = (len(plain),) + (1,) * (values.ndim - 1)
+        lo, hi, nonpositive, not_positive = (np.reshape(column, along) for column in (
+            [t[3] for t in plain], [t[4] for t in plain],
+            [t[2] == "nonpositive" for t in plain], [t[2] == "not_positive" for t in plain]))
+        hit = np.where(nonpositive, _condition("nonpositive", values, lo, hi),
+                       np.where(not_positive, _condition("not_positive", values, lo, hi),
+                                _condition("outside", values, lo, hi)))
+        flagged = np.where(hit, np.reshape(np.array([t[1] for t in plain], dtype=np.int32),
+                                           along), np.int32(0))
+        for version in range(len(bits)):
+            mine = [j for j, t in enumerate(plain) if t[0] == version]
+            if mine:
+                bits[version] = bits[version] | np.bitwise_or.reduce(flagged[mine], axis=0)
     for version, bit, kind, lo, hi, index, column in tests:
-        value = arrays[index] if column is None else arrays[index][..., column]
-        hit = _condition(kind, value, lo, hi)
-        bits[version] = bits[version] | np.where(hit, np.int32(bit), np.int32(0))
+        if kind == "any_outside":
+            hit = _condition(kind, tested(index, column), lo, hi)
+            bits[version] = bits[version] | np.where(hit, np.int32(bit), np.int32(0))
     if versions is None:
         return bits[0]
     return np.stack(np.broadcast_arrays(*bits), axis=-1)
