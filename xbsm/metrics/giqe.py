@@ -359,17 +359,17 @@ def _flags_kernel(*arrays, tests, versions):
 
     # the tests of a value (not over orientations) all at once, on the values broadcast
     # together along a new first axis: a test at a time cost six small numpy calls (22
-    # tests: about 150 us of a single niirs call)
+    # tests: 250 us of a single niirs call, 90 us this way)
     plain = [t for t in tests if t[2] != "any_outside"]
     if plain:
         values = np.stack(np.broadcast_arrays(*(tested(*t[5:]) for t in plain)))
         along = (len(plain),) + (1,) * (values.ndim - 1)
-        lo, hi, nonpositive, not_positive = (np.reshape(column, along) for column in (
+        low, high, nonpositive, not_positive = (np.reshape(field, along) for field in (
             [t[3] for t in plain], [t[4] for t in plain],
             [t[2] == "nonpositive" for t in plain], [t[2] == "not_positive" for t in plain]))
-        hit = np.where(nonpositive, _condition("nonpositive", values, lo, hi),
-                       np.where(not_positive, _condition("not_positive", values, lo, hi),
-                                _condition("outside", values, lo, hi)))
+        hit = np.where(nonpositive, _condition("nonpositive", values, low, high),
+                       np.where(not_positive, _condition("not_positive", values, low, high),
+                                _condition("outside", values, low, high)))
         flagged = np.where(hit, np.reshape(np.array([t[1] for t in plain], dtype=np.int32),
                                            along), np.int32(0))
         for version in range(len(bits)):
