@@ -1113,29 +1113,32 @@ def check_kind(ds: xr.Dataset, kind: str, argument: str) -> None:
         )
 
 
-def _check_parameters(kind: str, variables, specs) -> None:
+def _check_parameters(kind: str, variables, specs) -> set:
     """Every parameter of one dataset present, on allowed dims and within its range.
 
     The eager scalars (all of them in a single scenario) are compared in one array
     operation; a violation is reported for the first offending parameter in ``specs``
-    order, as one parameter at a time would.
+    order, as one parameter at a time would. Returns the names of those scalars.
     """
-    missing = [name for name in specs if name not in variables]
-    if missing:
-        raise ValueError(f"the {kind} dataset has no parameter {missing[0]!r}; "
-                         f"make it with xbsm.{kind}(...)")
-    values = [variables[name] for name in specs]
+    try:
+        values = [variables[name] for name in specs]
+    except KeyError:
+        missing = next(name for name in specs if name not in variables)
+        raise ValueError(f"the {kind} dataset has no parameter {missing!r}; "
+                         f"make it with xbsm.{kind}(...)") from None
     data = [v.data for v in values]  # once each: a Variable's ``data`` costs 0.4 us a read
     scalar = [d.ndim == 0 and _holds_values(d) for d in data]  # the array's ndim: cheaper
     low, high, low_open, high_open = _bounds(kind, specs)
     flat = np.array([d if s else np.nan for d, s in zip(data, scalar, strict=True)],
                     dtype=float)
     outside = _outside(flat, low, high, low_open, high_open)
+    scalars = set()
     for (name, spec), value, is_scalar, bad in zip(specs.items(), values, scalar, outside,
                                                    strict=True):
         if is_scalar:
             if bad:
                 _raise(name, spec, value.values)
+            scalars.add(name)
             continue
         # a parameter swept alongside another on that one's own dimension is paired
         # with it (a derived default such as pixel_pitch_y, or a user's paired sweep)
@@ -1146,6 +1149,7 @@ def _check_parameters(kind: str, variables, specs) -> None:
             mask = spec.violated(value.values)
             if np.any(mask):
                 _raise(name, spec, value.values[mask].ravel()[0])
+    return scalars
 
 
 def _is_eager(variable: xr.Variable) -> bool:
@@ -1186,30 +1190,35 @@ def check_inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> None:
     check_kind(sensor, "sensor", "sensor")
     check_kind(scenario, "scenario", "scenario")
     # on the datasets' Variables: a DataArray per parameter would cost more than the checks
-    for kind, ds, specs in (("sensor", sensor, SENSOR_SPECS),
-                            ("scenario", scenario, SCENARIO_SPECS)):
-        _check_parameters(kind, ds.variables, specs)
+    sensor_variables, scenario_variables = sensor.variables, scenario.variables
+    sensor_scalars = _check_parameters("sensor", sensor_variables, SENSOR_SPECS)
+    scenario_scalars = _check_parameters("scenario", scenario_variables, SCENARIO_SPECS)
     for name, spec in CONDITION_SPECS.items():  # the optional conditions, where given
-        variable = scenario.variables.get(name)
+        variable = scenario_variables.get(name)
         if variable is not None and _is_eager(variable):
             bad = spec.violated(variable.values)
             if np.any(bad):
                 _raise(name, spec, variable.values[bad].ravel()[0])
-    low, high = (sensor.variables[name] for name in ("wavelength_min", "wavelength_max"))
+    low, high = (sensor_variables[name] for name in ("wavelength_min", "wavelength_max"))
     if low.ndim or high.ndim or not float(low.values) < float(high.values):
         raise ValueError("wavelength_min and wavelength_max must be scalars with "
                          f"wavelength_min < wavelength_max; got {low.values} and {high.values}")
     if "filter_kernel" not in sensor:
         raise ValueError("the sensor dataset has no parameter 'filter_kernel'; make it with "
                          "xbsm.sensor(...)")
-    kernel = sensor.variables["filter_kernel"]  # an edited kernel: dims, finite, sums to 1
+    kernel = sensor_variables["filter_kernel"]  # an edited kernel: dims, finite, sums to 1
     _check_kernel_labels(kernel)
     _check_kernel_values(kernel.values)
     values, indexes = {}, {}
-    for ds in (sensor, scenario):
-        own = ds.indexes
+    for ds, variables, scalars in ((sensor, sensor_variables, sensor_scalars),
+                                   (scenario, scenario_variables, scenario_scalars)):
+        own = None
         for name in ds.data_vars:
-            variable = ds.variables[name]
-            if variable.data.ndim:  # a scalar shares no dimension
+            if name in scalars:  # a scalar shares no dimension
+                continue
+            variable = variables[name]
+            if variable.data.ndim:
+                if own is None:
+                    own = ds.indexes
                 values[name], indexes[name] = variable, own
     _check_shared_dims(values, "sensor and scenario", indexes)
