@@ -26,19 +26,21 @@ def is_lazy(value) -> bool:
     return type(data).__module__.startswith("dask")
 
 
-def _spectral(func, *args, spectral: int = 2, dtype=float, blocked: bool = False, **knobs):
+def _spectral(func, *args, spectral: int = 2, dtype=float, blocked: bool = False, mono=None,
+              **knobs):
     """``apply_kernel`` for a kernel ``func`` whose last ``spectral`` arguments are spectral.
 
     Those arguments reach the kernel with ``wavelength`` as their last axis, which
     the kernel reduces; ``wavelength`` is one dask chunk inside the kernel. With
     ``blocked``, the kernel runs in cache-sized slices (:func:`_in_blocks`), for
-    kernels that do not block their own work.
+    kernels that do not block their own work; ``mono`` (with ``blocked``) is the
+    kernel's monochromatic part, for sweeps that repeat its inputs (:func:`_in_blocks`).
     """
     core = [[]] * (len(args) - spectral) + [["wavelength"]] * spectral
     if not blocked:
         return apply_kernel(func, *args, core=core, dtype=dtype, **knobs)
     return apply_kernel(_in_blocks, *args, core=core, dtype=dtype, kernel=func,
-                        spectral=spectral, **knobs)
+                        spectral=spectral, mono=mono, **knobs)
 
 
 _BLOCK_VALUES = 2**15
@@ -48,7 +50,7 @@ of float64 per temporary: a sweep of 10^4 optical states x 80 nodes x 31 wavelen
 memory, not of the arithmetic)."""
 
 
-def _in_blocks(*args, kernel, spectral: int, **knobs):
+def _in_blocks(*args, kernel, spectral: int, mono=None, **knobs):
     """``kernel(*args, **knobs)`` over slices of the broadcast shape, in cache-sized blocks.
 
     The last ``spectral`` arguments carry ``wavelength`` on their last axis, which the
@@ -59,6 +61,14 @@ def _in_blocks(*args, kernel, spectral: int, **knobs):
     in slices along its longest axis, each holding about :data:`_BLOCK_VALUES` values.
     Every output value is the kernel's value on its own inputs (the kernels are
     elementwise outside the spectral sum).
+
+    ``mono``, if given, is the kernel's monochromatic part: ``mono(*args[:-1], **knobs)``
+    has the wavelength last and ``kernel`` is ``np.einsum("...k,...k->...", mono(...),
+    weights)`` to the bit. Where the arguments but the weights repeat along the axes
+    after the first (a focal-length or pixel-pitch sweep: each optical state has its own
+    frequency nodes, but a few columns of them serve thousands of states), ``mono`` is
+    evaluated once per distinct column (:func:`_distinct_columns`) and the blocks take
+    the weighted sums of its values gathered, the same contraction on the same numbers.
     """
     arrays = [np.asarray(a) for a in args]
     plain, spec = arrays[:len(arrays) - spectral], arrays[len(arrays) - spectral:]
@@ -68,6 +78,14 @@ def _in_blocks(*args, kernel, spectral: int, **knobs):
     per_value = max(a.shape[-1] for a in spec)
     if not shape or math.prod(work) * per_value <= 2 * _BLOCK_VALUES:
         return kernel(*args, **knobs)
+    # the wavelength axis alone on the spectral arguments but the weights
+    if mono is not None and all(math.prod(a.shape[:-1]) == 1 for a in spec[:-1]):
+        distinct = _distinct_columns(plain)
+        if distinct is not None:
+            columns, rows, index = distinct
+            values = mono(*columns, *(a.reshape(-1) for a in spec[:-1]), **knobs)
+            return _in_blocks(rows, index, spec[-1], kernel=_gathered_sum, spectral=1,
+                              values=values)
     axis = int(np.argmax(work))
     rest = math.prod(work) // work[axis]
     step = max(1, _BLOCK_VALUES // (rest * per_value))
@@ -80,6 +98,55 @@ def _in_blocks(*args, kernel, spectral: int, **knobs):
             out = np.empty(shape, dtype=np.result_type(part))
         out[(slice(None),) * axis + (slice(lo, hi),)] = part
     return out
+
+
+def _distinct_columns(arrays):
+    """The distinct columns of ``arrays`` broadcast together, if they repeat; else None.
+
+    A column is one position along the axes after the first, taken through every array
+    (the first axis is the kernel's frequency nodes). Where at most half of the columns
+    are distinct, returns ``(columns, rows, index)``: each array that varies along those
+    axes at the distinct columns (node, column), each other one with its node axis alone
+    (or none); and two index arrays broadcasting to the full shape that pick each
+    position's (node, distinct column).
+    """
+    shape = np.broadcast_shapes(*(a.shape for a in arrays))
+    if len(shape) < 2 or 0 in shape:
+        return None
+    n, m = shape[0], math.prod(shape[1:])
+
+    def varies(a):  # an extent along the axes after the first
+        return math.prod(a.shape[1:] if a.ndim == len(shape) else a.shape) > 1
+
+    full = {i: np.broadcast_to(a, shape).reshape(n, m) for i, a in enumerate(arrays)
+            if varies(a)}
+    if m < 2 or not full:
+        return None
+    key = np.concatenate(list(full.values())) if len(full) > 1 else next(iter(full.values()))
+    # each column's bits; first where it differs from the one before (a sweep in order
+    # repeats a column in runs; np.unique of every column cost 10 us a state), then
+    # np.unique of those
+    if key.dtype.itemsize == 8:
+        key = key.view(np.int64)
+    changed = np.empty(m, dtype=bool)
+    changed[0] = True
+    changed[1:] = (key[:, 1:] != key[:, :-1]).any(axis=0)
+    starts = np.flatnonzero(changed)
+    _, first, inverse = np.unique(np.ascontiguousarray(key[:, starts].T), axis=0,
+                                  return_index=True, return_inverse=True)
+    if 2 * first.size > m:
+        return None
+    first, inverse = starts[first], inverse.reshape(-1)[np.cumsum(changed) - 1]
+    columns = [full[i][:, first] if i in full
+               else a.reshape(a.shape[0], 1) if a.ndim == len(shape) else a.reshape(())
+               for i, a in enumerate(arrays)]
+    rows = np.arange(n).reshape((n,) + (1,) * (len(shape) - 1))
+    return columns, rows, inverse.reshape((1,) + shape[1:])
+
+
+def _gathered_sum(rows, index, weights, *, values):
+    """The weighted sum over the last axis of ``values`` at (``rows``, ``index``)."""
+    return np.einsum("...k,...k->...", values[rows, index], weights)
 
 
 def _slab(a, ndim, axis, lo, hi, core):

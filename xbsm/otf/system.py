@@ -132,6 +132,7 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
         # sensor quantities, weighted per scenario where they depend on wavelength
         "aperture": _spectral(_aperture_band_kernel, radial, s["aperture_diameter"],
                               s["obscuration_ratio"], s["defocus_opd"], wl, w, blocked=True,
+                              mono=_aperture_kernel if s["defocus_opd"].size == 1 else None,
                               defocus_otf=_defocus_otf(s["defocus_opd"], method)),
         "turbulence": None,
         "detector": apply_kernel(detector_kernel, s["detector_width_x"], s["focal_length"], fx,
@@ -216,18 +217,30 @@ def _aperture_band_kernel(radial, aperture_diameter, obscuration_ratio, defocus_
 
     With defocus (W020 = ``defocus_opd`` > 0 anywhere) the aperture's OTF is the
     defocused one of :func:`xbsm.otf.defocus.defocused_aperture_kernel` by the model
-    ``defocus_otf``; without, the in-focus OTF as it always was (to the bit).
+    ``defocus_otf``; without, the in-focus OTF as it always was (to the bit). Either is
+    ``np.einsum("...k,...k->...", _aperture_kernel(...), w)`` to the bit.
     """
     if np.any(defocus_opd):
-        mono = defocus.defocused_aperture_kernel(
-            _last(np.hypot(radial, 0.0)), _last(aperture_diameter), wl,
-            _last(obscuration_ratio), _last(defocus_opd), defocus_otf)
+        mono = _aperture_kernel(radial, aperture_diameter, obscuration_ratio, defocus_opd, wl,
+                                defocus_otf=defocus_otf)
     else:
         # the weighted sum taken as it is evaluated (the same contraction, row by row)
         return aperture.circular_aperture_band_kernel(_last(np.hypot(radial, 0.0)),
                                                       _last(aperture_diameter), wl,
                                                       _last(obscuration_ratio), w)
     return np.einsum("...k,...k->...", mono, w)
+
+
+def _aperture_kernel(radial, aperture_diameter, obscuration_ratio, defocus_opd, wl, *,
+                     defocus_otf):
+    """The monochromatic aperture OTF that :func:`_aperture_band_kernel` weights (numpy)."""
+    if np.any(defocus_opd):
+        return defocus.defocused_aperture_kernel(
+            _last(np.hypot(radial, 0.0)), _last(aperture_diameter), wl,
+            _last(obscuration_ratio), _last(defocus_opd), defocus_otf)
+    return aperture.circular_aperture_kernel(_last(np.hypot(radial, 0.0)),
+                                             _last(aperture_diameter), wl,
+                                             _last(obscuration_ratio))
 
 
 def _defocus_otf(defocus_opd, method: Method):
