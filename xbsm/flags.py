@@ -214,15 +214,20 @@ def flag(name: str) -> int:
 
 def flag_attrs(long_name: str = "validity flags") -> dict:
     """CF attributes for an integer flag variable using every known bit."""
-    names = list(FLAGS)
     return {
         "long_name": long_name,
         "units": "1",
-        "flag_masks": np.array([FLAGS[n][0] for n in names], dtype=np.int32),
-        "flag_meanings": " ".join(names),
+        "flag_masks": _FLAG_MASKS.copy(),  # each result its own array: a user may edit it
+        "flag_meanings": _FLAG_MEANINGS,
         "invalid_mask": np.int32(INVALID_MASK),
         "calibration_mask": np.int32(CALIBRATION_MASK),
     }
+
+
+# the table's CF form, built once (10 us a result, 1 % of a single snr call)
+_FLAG_MASKS = np.array([mask for mask, _ in FLAGS.values()], dtype=np.int32)
+_FLAG_MASKS.flags.writeable = False
+_FLAG_MEANINGS = " ".join(FLAGS)
 
 
 def set_flag(flags: xr.DataArray, name: str, condition: xr.DataArray) -> xr.DataArray:
