@@ -111,16 +111,16 @@ def _distinct_columns(arrays):
     position's (node, distinct column).
     """
     shape = np.broadcast_shapes(*(a.shape for a in arrays))
-    if len(shape) < 2 or 0 in shape:
+    n, m = (shape[0], math.prod(shape[1:])) if len(shape) > 1 else (0, 0)
+    if n == 0 or m < 2:
         return None
-    n, m = shape[0], math.prod(shape[1:])
 
     def varies(a):  # an extent along the axes after the first
         return math.prod(a.shape[1:] if a.ndim == len(shape) else a.shape) > 1
 
     full = {i: np.broadcast_to(a, shape).reshape(n, m) for i, a in enumerate(arrays)
             if varies(a)}
-    if m < 2 or not full:
+    if not full:
         return None
     key = np.concatenate(list(full.values())) if len(full) > 1 else next(iter(full.values()))
     # each column's bits; first where it differs from the one before (a sweep in order
