@@ -132,6 +132,8 @@ def system_components(sensor: xr.Dataset, scenario: xr.Dataset, frequency: xr.Da
         # sensor quantities, weighted per scenario where they depend on wavelength
         "aperture": _spectral(_aperture_band_kernel, radial, s["aperture_diameter"],
                               s["obscuration_ratio"], s["defocus_opd"], wl, w, blocked=True,
+                              # not with a defocus sweep: each block decides in focus or
+                              # not on its own W020 values, the shared columns on all of them
                               mono=_aperture_kernel if s["defocus_opd"].size == 1 else None,
                               defocus_otf=_defocus_otf(s["defocus_opd"], method)),
         "turbulence": None,
@@ -220,15 +222,14 @@ def _aperture_band_kernel(radial, aperture_diameter, obscuration_ratio, defocus_
     ``defocus_otf``; without, the in-focus OTF as it always was (to the bit). Either is
     ``np.einsum("...k,...k->...", _aperture_kernel(...), w)`` to the bit.
     """
-    if np.any(defocus_opd):
-        mono = _aperture_kernel(radial, aperture_diameter, obscuration_ratio, defocus_opd, wl,
-                                defocus_otf=defocus_otf)
-    else:
+    if not np.any(defocus_opd):
         # the weighted sum taken as it is evaluated (the same contraction, row by row)
         return aperture.circular_aperture_band_kernel(_last(np.hypot(radial, 0.0)),
                                                       _last(aperture_diameter), wl,
                                                       _last(obscuration_ratio), w)
-    return np.einsum("...k,...k->...", mono, w)
+    return np.einsum("...k,...k->...", _aperture_kernel(
+        radial, aperture_diameter, obscuration_ratio, defocus_opd, wl,
+        defocus_otf=defocus_otf), w)
 
 
 def _aperture_kernel(radial, aperture_diameter, obscuration_ratio, defocus_opd, wl, *,
