@@ -130,7 +130,8 @@ def dataset_of(variables: dict, coords: dict, attrs: dict) -> xr.Dataset:
         indexes[name] = _index_of(name, coord)
         every.update(indexes[name].create_variables({name: coord}))
     for variable in every.values():
-        dims.update(zip(variable.dims, variable.shape, strict=True))
+        if variable.ndim:  # most of one scenario's outputs are scalars
+            dims.update(zip(variable.dims, variable.shape, strict=True))
     return construct(every, set(coords), dims, attrs, indexes)
 
 

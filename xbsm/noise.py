@@ -172,7 +172,7 @@ def noise_gain(kernel: xr.DataArray):
 
 def noise_gain_arrays(kernel) -> dict:
     """:func:`noise_gain` of plain (..., kernel_y, kernel_x) arrays, as ``noise_gain``."""
-    return {"noise_gain": np.sqrt(np.sum(kernel**2, axis=(-2, -1)))}
+    return {"noise_gain": np.sqrt((kernel**2).sum(axis=(-2, -1)))}
 
 
 @contract(Output("total_noise", "count", "total noise"))

@@ -1209,6 +1209,8 @@ def check_inputs(sensor: xr.Dataset, scenario: xr.Dataset) -> None:
     kernel = sensor_variables["filter_kernel"]  # an edited kernel: dims, finite, sums to 1
     _check_kernel_labels(kernel)
     _check_kernel_values(kernel.values)
+    if not sensor.sizes.keys() & scenario.sizes.keys():
+        return  # inside one dataset xarray keeps every dimension consistent
     values, indexes = {}, {}
     for ds, variables, scalars in ((sensor, sensor_variables, sensor_scalars),
                                    (scenario, scenario_variables, scenario_scalars)):

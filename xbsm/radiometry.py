@@ -130,7 +130,7 @@ def _photon_rate_kernel(wavelength, quantum_efficiency, width_x, width_y, irradi
 def _trapezoid_kernel(spectral, wavelength):
     """Trapezoid rule along the last axis (xarray's ``integrate`` formula)."""
     step = wavelength[1:] - wavelength[:-1]
-    return np.sum(step * 0.5 * (spectral[..., 1:] + spectral[..., :-1]), axis=-1)
+    return (step * 0.5 * (spectral[..., 1:] + spectral[..., :-1])).sum(axis=-1)
 
 
 def _rate_kernel(wavelength, quantum_efficiency, width_x, width_y, irradiance, *, h, c):

@@ -43,7 +43,7 @@ def cubic_increment(y, x, t, left, right):
     h0, h1, h2 = x[1] - x[0], x[2] - x[1], x[3] - x[2]
     rise = y[2] - y[1]
     s0, s1, s2 = (y[1] - y[0]) / h0, rise / h1, (y[3] - y[2]) / h2
-    if np.all(left) and np.all(right):  # every outer node usable (the common case): the
+    if left.all() and right.all():  # every outer node usable (the common case): the
         # interior slopes, without the one-sided ones that would be selected away
         d1, d2 = pchip_interior_slope(h0, h1, s0, s1), pchip_interior_slope(h1, h2, s1, s2)
     else:

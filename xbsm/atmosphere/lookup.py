@@ -271,7 +271,8 @@ def _atmosphere_kernel(altitude, ground_range, visibility, *conditions_and_wavel
     rule = RULES[interpolation]
     scenarios = _scenarios(altitude, ground_range, visibility, rule, db, conditions)
     spectra = _spectra_of(db, scenarios, rule, window)
-    return (*np.moveaxis(spectra, -2, 0), _flags_of(scenarios))
+    # each component's spectra (views; np.moveaxis costs a single scenario 5 us)
+    return (*(spectra[..., k, :] for k in range(spectra.shape[-2])), _flags_of(scenarios))
 
 
 def interpolate_database(db, altitude, ground_range, visibility, interpolation,

@@ -362,7 +362,7 @@ def _flags_kernel(*arrays, tests, versions):
     # tests: 250 us of a single niirs call, 90 us this way)
     plain = [t for t in tests if t[2] != "any_outside"]
     if plain:
-        values = np.stack(np.broadcast_arrays(*(tested(*t[5:]) for t in plain)))
+        values = np.array(np.broadcast_arrays(*(tested(*t[5:]) for t in plain)))
         along = (len(plain),) + (1,) * (values.ndim - 1)
         low, high, nonpositive, not_positive = (np.reshape(field, along) for field in (
             [t[3] for t in plain], [t[4] for t in plain],
