@@ -164,10 +164,20 @@ def _slab(a, ndim, axis, lo, hi, core):
     return a[tuple(index)]
 
 
+def normalised_weights(weights):
+    """``weights`` over their sum along the last axis, a NaN counting as zero (numpy).
+
+    ``np.nansum``'s own steps (a copy with every NaN set to 0, then its sum), without its
+    wrappers, which cost a single scenario 7 us a call.
+    """
+    present = np.array(weights)
+    np.copyto(present, 0, where=np.isnan(present))
+    return weights / present.sum(axis=-1, keepdims=True)
+
+
 def weighted_sum_kernel(otf, weights):
     """Sum over the last (wavelength) axis of ``otf`` times the normalised ``weights``."""
-    normalised = weights / np.nansum(weights, axis=-1, keepdims=True)
-    return np.einsum("...k,...k->...", otf, normalised)
+    return np.einsum("...k,...k->...", otf, normalised_weights(weights))
 
 
 def spectral_average(otf, weights, dim: str = "wavelength"):
