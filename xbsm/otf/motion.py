@@ -96,11 +96,10 @@ def drift_slices_kernel(drift_x, drift_y, frequency):
     # orientation-major in memory (a view with the orientation last): each slice written
     # whole, and the product of the OTF factors runs along the nodes (with the orientation
     # innermost, every factor that does not have it made numpy's loops two values long)
-    out = np.empty((2,) + np.broadcast_shapes(np.shape(drift_x), np.shape(drift_y),
-                                              np.shape(frequency)))
+    out = np.empty((2,) + np.broadcast(drift_x, drift_y, frequency).shape)
     for slice_, drift in zip(out, (drift_x, drift_y), strict=True):
         slice_[...] = 1.0 if _still(drift) else _drift_sinc(drift, frequency)
-    return np.moveaxis(out, 0, -1)
+    return out.transpose((*range(1, out.ndim), 0))  # np.moveaxis(out, 0, -1), 4 us less
 
 
 def _still(drift) -> bool:

@@ -28,6 +28,8 @@ ORIENTATION = xr.DataArray(["x", "y"], dims="orientation", name="orientation")
 """The two slice directions the GIQE uses: along x (fx = f) and along y (fy = f)."""
 _UNIT_X = xr.DataArray([1.0, 0.0], dims="orientation", coords={"orientation": ORIENTATION})
 _UNIT_Y = xr.DataArray([0.0, 1.0], dims="orientation", coords={"orientation": ORIENTATION})
+_X_AND_Y = np.eye(2)  # the unit vectors as numpy rows (a list costs 3 us a product)
+_X_AND_Y.flags.writeable = False
 
 COMPONENTS = ("aperture", "turbulence", "detector", "jitter", "drift", "wavefront", "filter")
 
@@ -519,7 +521,7 @@ def system_slice_arrays(p, nodes, wavelength, spectral_weights, integration_time
     parameters), with the ``nodes`` (frequency) along the first axis and orientation
     (x, y) along the second.
     """
-    fx, fy = nodes[:, None] * [1.0, 0.0], nodes[:, None] * [0.0, 1.0]
+    fx, fy = nodes[:, None] * _X_AND_Y[0], nodes[:, None] * _X_AND_Y[1]
     wl, w = _band_weights_arrays(spectral_weights, wavelength, method.otf_wavelengths)
     r0_ref = _turbulent_path_kernel(
         p["high_altitude_wind_speed"], slant_range, p["altitude"], p["cn2_at_1m"],
