@@ -11,6 +11,7 @@ is outside the version's calibration. RER and EHO come from
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -360,20 +361,17 @@ def _flags_kernel(*arrays, tests, versions):
     # the tests of a value (not over orientations) all at once, on the values broadcast
     # together along a new first axis: a test at a time cost six small numpy calls (22
     # tests: 250 us of a single niirs call, 90 us this way)
-    plain = [t for t in tests if t[2] != "any_outside"]
+    plain = tuple(t for t in tests if t[2] != "any_outside")
     if plain:
         values = np.array(np.broadcast_arrays(*(tested(*t[5:]) for t in plain)))
         along = (len(plain),) + (1,) * (values.ndim - 1)
-        low, high, nonpositive, not_positive = (np.reshape(field, along) for field in (
-            [t[3] for t in plain], [t[4] for t in plain],
-            [t[2] == "nonpositive" for t in plain], [t[2] == "not_positive" for t in plain]))
+        fields, by_version = _plain_tests(plain, len(bits))
+        low, high, nonpositive, not_positive, bit = (f.reshape(along) for f in fields)
         hit = np.where(nonpositive, _condition("nonpositive", values, low, high),
                        np.where(not_positive, _condition("not_positive", values, low, high),
                                 _condition("outside", values, low, high)))
-        flagged = np.where(hit, np.reshape(np.array([t[1] for t in plain], dtype=np.int32),
-                                           along), np.int32(0))
-        for version in range(len(bits)):
-            mine = [j for j, t in enumerate(plain) if t[0] == version]
+        flagged = np.where(hit, bit, np.int32(0))
+        for version, mine in enumerate(by_version):
             if mine:
                 bits[version] = bits[version] | np.bitwise_or.reduce(flagged[mine], axis=0)
     for version, bit, kind, lo, hi, index, column in tests:
@@ -383,6 +381,24 @@ def _flags_kernel(*arrays, tests, versions):
     if versions is None:
         return bits[0]
     return np.stack(np.broadcast_arrays(*bits), axis=-1)
+
+
+@functools.lru_cache(maxsize=64)
+def _plain_tests(plain: tuple, n_versions: int) -> tuple:
+    """:func:`_flags_kernel`'s tests of a value as arrays along the tests, built once.
+
+    Returns ((low, high, nonpositive, not_positive, bit), and for each version the indices
+    of its tests); the arrays are read-only (shared by every call with these tests).
+    """
+    fields = (np.array([t[3] for t in plain]), np.array([t[4] for t in plain]),
+              np.array([t[2] == "nonpositive" for t in plain]),
+              np.array([t[2] == "not_positive" for t in plain]),
+              np.array([t[1] for t in plain], dtype=np.int32))
+    for field in fields:
+        field.flags.writeable = False
+    by_version = tuple([j for j, t in enumerate(plain) if t[0] == version]
+                       for version in range(n_versions))
+    return fields, by_version
 
 
 # ---------------------------------------------------------------- the xarray layer
