@@ -10,7 +10,7 @@ from otf_helpers import check_lazy, polar
 import xbsm
 from xbsm.examples import olson_scenario, olson_sensor
 from xbsm.otf.aperture import circular_aperture
-from xbsm.otf.spectral import spectral_average
+from xbsm.otf.spectral import normalised_weights, spectral_average
 
 WL = xr.DataArray([0.5e-6, 0.6e-6, 0.7e-6], dims="wavelength")
 
@@ -24,6 +24,20 @@ def test_weights_are_normalised_and_extra_dims_kept():
     xr.testing.assert_allclose(out.isel(scene=1, drop=True), mono.isel(wavelength=1, drop=True))
     np.testing.assert_allclose(out.isel(frequency=0), 1.0, rtol=1e-15)
     xr.testing.assert_allclose(spectral_average(mono, 7 * w), out)
+
+
+@pytest.mark.parametrize("weights", [
+    np.array([0.3, 1.7, 2.9]),
+    np.array([[1.0, np.nan, 2.0], [np.nan, np.nan, np.nan], [0.0, 0.0, 0.0]]),
+    np.array([[3, 1, 2]]),  # integers, as numpy's nansum takes them
+    np.random.default_rng(5).random((4, 7, 31)).transpose(2, 0, 1)[..., ::2],  # strided
+])
+def test_normalised_weights_are_nansums_bits(weights):
+    # numpy's own np.nansum is the reference: the kernel repeats its steps without its
+    # wrappers, so every value (NaN included) must be the same to the bit
+    with np.errstate(divide="ignore", invalid="ignore"):  # a row of NaN or 0: 0 / 0
+        expected = weights / np.nansum(weights, axis=-1, keepdims=True)
+        np.testing.assert_array_equal(normalised_weights(weights), expected, strict=True)
 
 
 def test_complex_otfs_are_averaged():
