@@ -268,7 +268,11 @@ def _geometric_mean_kernel(a, b):
 
 def _ground_plane_kernel(gsd, elevation, power):
     """GSD / sin(elevation)^power; NaN where sin(elevation) <= 0."""
-    sin_el = np.sin(elevation)
+    return _over_sine(gsd, np.sin(elevation), power)
+
+
+def _over_sine(gsd, sin_el, power):
+    """:func:`_ground_plane_kernel` from the sine of the elevation."""
     with np.errstate(all="ignore"):
         out = gsd / (sin_el**power)
     return np.where(sin_el > 0, out, np.nan)
@@ -285,7 +289,12 @@ def _giqe3_kernel(rer, gsd, eho, noise_gain, snr):
 
 def _giqe4_kernel(rer, gsd, elevation, eho, noise_gain, snr, noise_coefficient):
     sin_el = np.sin(elevation)
-    gsd_gp = _ground_plane_kernel(gsd, elevation, 0.5)
+    return _giqe4_on_ground(rer, gsd, sin_el, _over_sine(gsd, sin_el, 0.5), eho, noise_gain,
+                            snr, noise_coefficient)
+
+
+def _giqe4_on_ground(rer, gsd, sin_el, gsd_gp, eho, noise_gain, snr, noise_coefficient):
+    """:func:`_giqe4_kernel` from the sine of the elevation and the ground-plane GSD."""
     c1 = np.where(rer >= 0.9, 3.32, 3.16)
     c2 = np.where(rer >= 0.9, 1.559, 2.817)
     with np.errstate(all="ignore"):
@@ -310,9 +319,13 @@ def _giqe5_rer_kernel(rer_x, rer_y):
 
 
 def _giqe5_kernel(gsd, elevation, snr, rer_x, rer_y):
-    rer = _giqe5_rer_kernel(rer_x, rer_y)
     sin_el = np.sin(elevation)
-    gsd_w = _ground_plane_kernel(gsd, elevation, 0.25)
+    return _giqe5_on_ground(gsd, sin_el, _over_sine(gsd, sin_el, 0.25), snr,
+                            _giqe5_rer_kernel(rer_x, rer_y))
+
+
+def _giqe5_on_ground(gsd, sin_el, gsd_w, snr, rer):
+    """:func:`_giqe5_kernel` from the sine of the elevation, GIQE 5's GSD and RER."""
     with np.errstate(all="ignore"):
         log_rer = np.log10(rer)
         niirs = (
@@ -329,10 +342,24 @@ def _giqe5_kernel(gsd, elevation, snr, rer_x, rer_y):
 def _niirs_by_version_kernel(rer, gsd_x, gsd_y, eho, noise_gain, snr, elevation, rer_x, rer_y,
                              noise_coefficient):
     """NIIRS by GIQE 3, 4 and 5 along a new last axis (GIQE 5 on gsd_x, as pyBSM's niirs5)."""
+    return _niirs_of_terms(_giqe_terms(gsd_x, gsd_y, elevation, rer_x, rer_y), rer, gsd_x, eho,
+                           noise_gain, snr, noise_coefficient)
+
+
+def _giqe_terms(gsd_x, gsd_y, elevation, rer_x, rer_y) -> dict:
+    """What the three GIQEs share: the elevation's sine, the GSDs and GIQE 5's RER."""
+    sin_el = np.sin(elevation)
     gsd = _geometric_mean_kernel(gsd_x, gsd_y)
-    niirs3 = _giqe3_kernel(rer, gsd, eho, noise_gain, snr)
-    niirs4 = _giqe4_kernel(rer, gsd, elevation, eho, noise_gain, snr, noise_coefficient)
-    niirs5 = _giqe5_kernel(gsd_x, elevation, snr, rer_x, rer_y)
+    return {"sin_el": sin_el, "gsd": gsd, "gsd_gp": _over_sine(gsd, sin_el, 0.5),
+            "gsd_w": _over_sine(gsd_x, sin_el, 0.25), "rer5": _giqe5_rer_kernel(rer_x, rer_y)}
+
+
+def _niirs_of_terms(t, rer, gsd_x, eho, noise_gain, snr, noise_coefficient):
+    """:func:`_niirs_by_version_kernel` from :func:`_giqe_terms` (GIQE 5 on ``gsd_x``)."""
+    niirs3 = _giqe3_kernel(rer, t["gsd"], eho, noise_gain, snr)
+    niirs4 = _giqe4_on_ground(rer, t["gsd"], t["sin_el"], t["gsd_gp"], eho, noise_gain, snr,
+                              noise_coefficient)
+    niirs5 = _giqe5_on_ground(gsd_x, t["sin_el"], t["gsd_w"], snr, t["rer5"])
     return np.stack(np.broadcast_arrays(niirs3, niirs4, niirs5), axis=-1)
 
 
@@ -833,14 +860,11 @@ def sampling_q_arrays(wavelength, aperture_diameter, ifov) -> dict:
 def giqe_arrays(rer, eho, rer_x, rer_y, gsd_x, gsd_y, snr, elevation, noise_gain, q, *,
                 noise_coefficient, calibration) -> dict:
     """:func:`giqe_by_version` on plain arrays (``q`` over orientation on its last axis)."""
-    gsd = _geometric_mean_kernel(gsd_x, gsd_y)
-    gsd_gp = _ground_plane_kernel(gsd, elevation, power=0.5)
-    gsd_w = _ground_plane_kernel(gsd_x, elevation, power=0.25)
-    rer5 = _giqe5_rer_kernel(rer_x, rer_y)
-    niirs = _niirs_by_version_kernel(rer, gsd_x, gsd_y, eho, noise_gain, snr, elevation,
-                                     rer_x, rer_y, noise_coefficient=noise_coefficient)
+    terms = _giqe_terms(gsd_x, gsd_y, elevation, rer_x, rer_y)  # once for all three
+    gsd, gsd_gp, gsd_w, rer5 = (terms[name] for name in ("gsd", "gsd_gp", "gsd_w", "rer5"))
+    niirs = _niirs_of_terms(terms, rer, gsd_x, eho, noise_gain, snr, noise_coefficient)
     gsd5_gp = (None if calibration[5].gsd_ground_plane is None
-               else _ground_plane_kernel(gsd_x, elevation, power=0.5))
+               else _over_sine(gsd_x, terms["sin_el"], 0.5))
     tested = (
         {"snr": snr, "rer": rer, "gsd": gsd, "elevation": elevation, "niirs": niirs},
         {"snr": snr, "rer": rer, "gsd": gsd_gp, "elevation": elevation, "niirs": niirs},
