@@ -729,8 +729,8 @@ def test_giqe_by_version_kernel_broadcasts_size_one_axes_like_apply_ufunc():
     # apply_ufunc hands kernels arrays with size-1 axes for missing dims: rer on a first
     # axis, snr on a second; the result spans both with the versions on a last axis
     rer, snr = np.array([[0.3], [0.6]]), np.array([5.0, 20.0, 50.0])
-    out = g._niirs_by_version_kernel(rer, 0.3, 0.3, 1.0, 1.0, snr, 1.0, rer, rer,
-                                     noise_coefficient=0.344)
+    out = g._niirs_of_terms(g._giqe_terms(0.3, 0.3, 1.0, rer, rer), rer, 0.3, 1.0, 1.0, snr,
+                            noise_coefficient=0.344)
     assert out.shape == (2, 3, 3)
     # each column is that version's own kernel (definition)
     np.testing.assert_array_equal(out[..., 0], g._giqe3_kernel(rer, 0.3, 1.0, 1.0, snr))

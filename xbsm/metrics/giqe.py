@@ -339,13 +339,6 @@ def _giqe5_on_ground(gsd, sin_el, gsd_w, snr, rer):
     return np.where(keep, niirs, np.nan)
 
 
-def _niirs_by_version_kernel(rer, gsd_x, gsd_y, eho, noise_gain, snr, elevation, rer_x, rer_y,
-                             noise_coefficient):
-    """NIIRS by GIQE 3, 4 and 5 along a new last axis (GIQE 5 on gsd_x, as pyBSM's niirs5)."""
-    return _niirs_of_terms(_giqe_terms(gsd_x, gsd_y, elevation, rer_x, rer_y), rer, gsd_x, eho,
-                           noise_gain, snr, noise_coefficient)
-
-
 def _giqe_terms(gsd_x, gsd_y, elevation, rer_x, rer_y) -> dict:
     """What the three GIQEs share: the elevation's sine, the GSDs and GIQE 5's RER."""
     sin_el = np.sin(elevation)
@@ -355,7 +348,10 @@ def _giqe_terms(gsd_x, gsd_y, elevation, rer_x, rer_y) -> dict:
 
 
 def _niirs_of_terms(t, rer, gsd_x, eho, noise_gain, snr, noise_coefficient):
-    """:func:`_niirs_by_version_kernel` from :func:`_giqe_terms` (GIQE 5 on ``gsd_x``)."""
+    """NIIRS by GIQE 3, 4 and 5 along a new last axis, from :func:`_giqe_terms`.
+
+    GIQE 5 on ``gsd_x``, as pyBSM's niirs5.
+    """
     niirs3 = _giqe3_kernel(rer, t["gsd"], eho, noise_gain, snr)
     niirs4 = _giqe4_on_ground(rer, t["gsd"], t["sin_el"], t["gsd_gp"], eho, noise_gain, snr,
                               noise_coefficient)
